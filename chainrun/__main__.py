@@ -1,0 +1,3 @@
+from chainrun.cli import main
+
+main()

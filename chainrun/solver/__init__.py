@@ -1,0 +1,203 @@
+"""The event-driven solver: the public types and the ``simulate`` driver.
+
+This package owns the dynamics and nothing else: it turns (N, K, alpha, output times,
+accuracy) into arrays and never touches files. The numba kernels live in
+``_kernels``; this module drives them between output times, maps their integer status
+codes to named outcomes, and hands snapshots to an observer hook.
+
+Equations (paper units, every coefficient 1), for balls n = 1..N::
+
+    x_n'' = (x_{n-1} - x_n)_+^alpha - (x_n - x_{n+1})_+^alpha
+
+with x_n(0) = 0, x_n'(0) = 1 for n <= K and 0 otherwise. Contact j joins balls j and
+j+1 (0-based here: contact j joins balls j and j+1 of the arrays).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_RTOL",
+    "Diagnostics",
+    "EventKind",
+    "Outcome",
+    "Solution",
+    "simulate",
+    "velocity_floor",
+]
+
+#: Default relative accuracy of a step (velocities are of order 1 in paper units).
+DEFAULT_RTOL = 1e-12
+
+
+class EventKind(enum.IntEnum):
+    """What happened to a contact at a logged event.
+
+    Every contact starts closed (the balls touch). ``OPEN`` and ``CLOSE`` are located
+    zero crossings of the compression; ``RELEASE`` and ``ENGAGE`` are the noise-floor
+    rules (see ``velocity_floor``): a contact whose compression, rate and load are all
+    below the floor is released, and a released contact re-engages when pressed beyond
+    the floor's compression.
+    """
+
+    RELEASE = -2
+    OPEN = -1
+    CLOSE = 1
+    ENGAGE = 2
+
+
+class Outcome(enum.Enum):
+    """How a run ended. Only ``TERMINAL`` and ``STOP_TIME`` are successes."""
+
+    TERMINAL = "terminal"
+    STOP_TIME = "stop_time"
+    EVENT_LIMIT = "event_limit"
+    NON_FINITE = "non_finite"
+    STEP_UNDERFLOW = "step_underflow"
+
+    @property
+    def ok(self) -> bool:
+        return self in (Outcome.TERMINAL, Outcome.STOP_TIME)
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """Cost and accuracy of one run.
+
+    momentum_error is absolute (the initial momentum is K); energy_error is relative to
+    the initial energy K/2.
+    """
+
+    steps: int
+    rejected_steps: int
+    events: int
+    momentum_error: float
+    energy_error: float
+    wall_time: float
+    max_window: int
+    rtol: float
+    velocity_floor: float
+
+
+@dataclass(frozen=True)
+class Solution:
+    """The result of one run.
+
+    Attributes
+    ----------
+    n, k : int
+    alpha : float
+    outcome : Outcome
+    message : str
+        One line for a person, naming the time and place of any failure.
+    end_time : float
+        The terminal time (the last event before which no collision can happen
+        again), or the stop time when stopped by ``t_end``.
+    terminal : bool
+        Whether the terminal state was reached.
+    final_position, final_velocity : ndarray, shape (N,)
+        State at ``end_time``.
+    separation_time, separation_velocity : ndarray, shape (N,)
+        Time and velocity at which each ball last lost its last contact; NaN for a
+        ball that never did (it never moved, or never left a compressed cluster).
+    event_time : ndarray, shape (E,)
+    event_contact : ndarray of int64, shape (E,)
+        Contact j joins balls j and j+1 (0-based).
+    event_kind : ndarray of int8, shape (E,)
+        ``EventKind`` values.
+    times : ndarray, shape (T,)
+        The snapshot times.
+    positions, velocities : ndarray, shape (T, N), or None
+        Snapshots, when no ``on_snapshot`` observer consumed them.
+    diagnostics : Diagnostics
+    """
+
+    n: int
+    k: int
+    alpha: float
+    outcome: Outcome
+    message: str
+    end_time: float
+    terminal: bool
+    final_position: np.ndarray
+    final_velocity: np.ndarray
+    separation_time: np.ndarray
+    separation_velocity: np.ndarray
+    event_time: np.ndarray
+    event_contact: np.ndarray
+    event_kind: np.ndarray
+    times: np.ndarray
+    positions: np.ndarray | None
+    velocities: np.ndarray | None
+    diagnostics: Diagnostics = field(repr=False)
+
+
+def velocity_floor(rtol: float) -> float:
+    """The approach speed below which a collision does not count.
+
+    Velocities are of order 1 in paper units, so a step accurate to ``rtol`` cannot
+    resolve relative speeds below about ``rtol``; behind a Hertz wave, rounding leaves
+    velocities near 1e-15 whose "collisions" would go on until t ~ 1e10. Pairs
+    approaching slower than the floor are not collisions, and a contact whose
+    compression rate is below it and whose stored energy could not produce it is
+    released. Ignoring them changes a final velocity by at most about the floor.
+    """
+    return float(rtol)
+
+
+SnapshotHook = Callable[[int, float, np.ndarray, np.ndarray], None]
+ProgressHook = Callable[[float], None]
+
+
+def simulate(
+    n: int,
+    k: int,
+    alpha: float,
+    times=(),
+    *,
+    t_end: float | None = None,
+    rtol: float = DEFAULT_RTOL,
+    max_events: int | None = None,
+    on_snapshot: SnapshotHook | None = None,
+    on_progress: ProgressHook | None = None,
+) -> Solution:
+    """Run one line of balls to its terminal state (or to ``t_end``).
+
+    Parameters
+    ----------
+    n : int
+        Number of balls, >= 1.
+    k : int
+        Number of impacting balls at velocity 1, 1 <= k <= n.
+    alpha : float
+        Contact exponent, >= 1 (1 linear, 1.5 Hertz).
+    times : array_like, shape (T,)
+        Non-decreasing, non-negative snapshot times. Snapshots are the exact state
+        at those times (interpolated within a step, analytic in free flight).
+    t_end : float, optional
+        Stop time; by default run to the terminal state.
+    rtol : float
+        Relative accuracy of a step; also sets ``velocity_floor``.
+    max_events : int, optional
+        Stop with ``Outcome.EVENT_LIMIT`` after this many contact events.
+    on_snapshot : callable(index, t, x, v), optional
+        Receives each snapshot as it is taken (x, v of shape (N,), only valid during
+        the call); when given, ``Solution.positions`` and ``velocities`` are None.
+    on_progress : callable(t), optional
+        Called between output times and periodically during long stretches.
+
+    Returns
+    -------
+    Solution
+    """
+    from chainrun.solver._driver import run
+
+    return run(
+        n, k, alpha, times, t_end=t_end, rtol=rtol, max_events=max_events,
+        on_snapshot=on_snapshot, on_progress=on_progress,
+    )

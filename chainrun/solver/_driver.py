@@ -1,0 +1,243 @@
+"""Drives the kernels between output times: state set-up, the status loop, the result.
+
+The kernel (``_kernels.advance``) runs until it needs Python: a snapshot is ready, its
+event log is full, its arrays must grow, a stretch of steps has passed (progress), or
+the run has ended. This module answers each of these and turns the final status into
+a named ``Outcome``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from chainrun.solver import (
+    DEFAULT_RTOL,
+    Diagnostics,
+    Outcome,
+    Solution,
+    velocity_floor,
+)
+from chainrun.solver import _kernels as K
+from chainrun.solver.physics import kinetic_energy, momentum, potential_energy
+
+_EVENT_BUFFER = 1 << 16
+_INITIAL_WINDOW = 256
+
+_OUTCOMES = {
+    K.ST_TERMINAL: Outcome.TERMINAL,
+    K.ST_STOP_TIME: Outcome.STOP_TIME,
+    K.ST_EVENT_LIMIT: Outcome.EVENT_LIMIT,
+    K.ST_NON_FINITE: Outcome.NON_FINITE,
+    K.ST_STEP_UNDERFLOW: Outcome.STEP_UNDERFLOW,
+}
+
+
+def release_compression(alpha: float, floor: float) -> float:
+    """Compression whose stored energy equals a relative speed of ``floor``.
+
+    Solves ``4 c^(alpha+1) / (alpha+1) = floor^2``: contacts pressed less than this,
+    and moving slower than the floor, cannot produce a speed above the floor.
+    """
+    return ((alpha + 1.0) * floor * floor / 4.0) ** (1.0 / (alpha + 1.0))
+
+
+def _check_inputs(n, k, alpha, times, t_end, rtol, max_events):
+    if isinstance(n, bool) or int(n) != n or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    if isinstance(k, bool) or int(k) != k or not 1 <= k <= n:
+        raise ValueError(f"k must be an integer with 1 <= k <= n ({n}), got {k!r}")
+    if not (math.isfinite(alpha) and alpha >= 1.0):
+        raise ValueError(f"alpha must be a finite number >= 1, got {alpha!r}")
+    if not (math.isfinite(rtol) and 1e-15 <= rtol <= 1e-3):
+        raise ValueError(f"rtol must be within [1e-15, 1e-3], got {rtol!r}")
+    times = np.asarray(times, dtype=np.float64).reshape(-1)
+    if times.size:
+        if not np.all(np.isfinite(times)) or times[0] < 0 or np.any(np.diff(times) < 0):
+            raise ValueError("times must be finite, non-negative and non-decreasing")
+    if t_end is not None:
+        if not (math.isfinite(t_end) and t_end > 0):
+            raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
+        if times.size and times[-1] > t_end:
+            raise ValueError(f"snapshot time {times[-1]} is after t_end = {t_end}")
+    if max_events is not None and (int(max_events) != max_events or max_events < 1):
+        raise ValueError(f"max_events must be a positive integer, got {max_events!r}")
+    return int(n), int(k), float(alpha), times
+
+
+def _alloc_window(cap: int) -> dict:
+    return dict(
+        cb=np.zeros(cap, np.int64),
+        X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
+        X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap),
+        KX=np.zeros((K._NSE, cap)), KV=np.zeros((K._NSE, cap)),
+        FX=np.zeros((7, cap)), FV=np.zeros((7, cap)),
+    )
+
+
+def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
+    ncont = max(n - 1, 1)
+    floor = velocity_floor(rtol)
+    bv = np.zeros(n)
+    bv[:k] = 1.0
+    cst = np.full(ncont, K.DORMANT, np.int8)
+    fs = np.zeros(K.F_NFLOAT)
+    ints = np.zeros(K.I_NINT, np.int64)
+    ccap = n // 2 + 2
+    clo = np.zeros(ccap, np.int64)
+    chi = np.zeros(ccap, np.int64)
+    if k < n:
+        # the last impacting ball meets the first ball at rest: the one live contact
+        cst[k - 1] = K.ACTIVE
+        clo[0], chi[0] = k - 1, k
+        ints[K.I_NCL] = 1
+        ints[K.I_DIRTY] = 1
+    fs[K.F_H] = 1e-3
+    fs[K.F_TEND] = math.inf if t_end is None else float(t_end)
+    fs[K.F_TOL] = rtol
+    fs[K.F_FLOOR] = floor
+    fs[K.F_EPSREL] = release_compression(alpha, floor)
+    fs[K.F_ALPHA] = alpha
+    ints[K.I_MODE] = 0 if alpha == 1.0 else (1 if alpha == 1.5 else 2)
+    ints[K.I_MAXEV] = -1 if max_events is None else int(max_events)
+    return K.State(
+        bx=np.zeros(n), bv=bv, bt=np.zeros(n),
+        sep_t=np.full(n, np.nan), sep_v=np.full(n, np.nan),
+        bmap=np.full(n, -1, np.int64),
+        cst=cst, lvl=np.zeros(ncont), stamp=np.zeros(ncont, np.int64),
+        clo=clo, chi=chi, coff=np.zeros(ccap, np.int64),
+        **_alloc_window(min(n, _INITIAL_WINDOW)),
+        hp_t=np.zeros(n), hp_j=np.zeros(n, np.int64), hp_s=np.zeros(n, np.int64),
+        ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
+        ev_k=np.zeros(_EVENT_BUFFER, np.int8),
+        ox=np.zeros(n), ov=np.zeros(n),
+        freed=np.zeros(n, np.int64), jbuf=np.zeros(n, np.int64),
+        fs=fs, ints=ints,
+    )
+
+
+def _grow(S: K.State, need: int) -> K.State:
+    n = S.bx.shape[0]
+    cap = min(n, max(need, 2 * S.X.shape[0]))
+    window = _alloc_window(cap)
+    m = int(S.ints[K.I_M])
+    window["cb"][:m] = S.cb[:m]
+    return S._replace(**window)
+
+
+def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
+        on_snapshot=None, on_progress=None) -> Solution:
+    """See ``chainrun.solver.simulate``."""
+    n, k, alpha, times = _check_inputs(n, k, alpha, times, t_end, rtol, max_events)
+    wall0 = time.perf_counter()
+    S = _new_state(n, k, alpha, rtol, t_end, max_events)
+    nt = times.size
+    keep = on_snapshot is None
+    positions = np.empty((nt, n)) if keep else None
+    velocities = np.empty((nt, n)) if keep else None
+
+    def emit(i, t):
+        if keep:
+            positions[i] = S.ox
+            velocities[i] = S.ov
+        else:
+            on_snapshot(i, float(t), S.ox, S.ov)
+
+    ev_t, ev_j, ev_k = [], [], []
+
+    def flush():
+        m = int(S.ints[K.I_NEV])
+        ev_t.append(S.ev_t[:m].copy())
+        ev_j.append(S.ev_j[:m].copy())
+        ev_k.append(S.ev_k[:m].copy())
+        S.ints[K.I_NEV] = 0
+
+    nout = 0
+    if nt:
+        S.fs[K.F_TOUT] = times[0]
+        S.ints[K.I_HAVEOUT] = 1
+    while True:
+        status = K.advance(S)
+        if status == K.ST_OUTPUT:
+            emit(nout, times[nout])
+            nout += 1
+            if nout < nt:
+                S.fs[K.F_TOUT] = times[nout]
+                S.ints[K.I_HAVEOUT] = 1
+            if on_progress is not None:
+                on_progress(float(S.fs[K.F_T]))
+        elif status == K.ST_FLUSH:
+            flush()
+        elif status == K.ST_GROW:
+            need = int(S.ints[K.I_NEED])
+            if need <= 0:
+                raise RuntimeError("solver state is inconsistent: cluster table overflow")
+            S = _grow(S, need)
+        elif status == K.ST_YIELD:
+            if on_progress is not None:
+                on_progress(float(S.fs[K.F_T]))
+        else:
+            break
+    flush()
+    outcome = _OUTCOMES[status]
+    t_final = float(S.fs[K.F_T])
+    # snapshots after the terminal state are free flight; the kernel evaluates them
+    while status == K.ST_TERMINAL and nout < nt:
+        K._snapshot(S, times[nout])
+        emit(nout, times[nout])
+        nout += 1
+    K._snapshot(S, t_final)
+    x_final = S.ox.copy()
+    v_final = S.ov.copy()
+    wall = time.perf_counter() - wall0
+
+    p_err = abs(float(momentum(v_final)) - k)
+    e0 = 0.5 * k
+    e1 = float(kinetic_energy(v_final) + potential_energy(x_final, alpha))
+    event_time = np.concatenate(ev_t)
+    message = _message(outcome, t_final, n, int(S.ints[K.I_EVTOTAL]), S)
+    diagnostics = Diagnostics(
+        steps=int(S.ints[K.I_STEPS]),
+        rejected_steps=int(S.ints[K.I_REJ]),
+        events=int(event_time.size),
+        momentum_error=p_err,
+        energy_error=abs(e1 - e0) / e0,
+        wall_time=wall,
+        max_window=int(S.ints[K.I_MAXWIN]),
+        rtol=float(rtol),
+        velocity_floor=velocity_floor(rtol),
+    )
+    return Solution(
+        n=n, k=k, alpha=alpha, outcome=outcome, message=message,
+        end_time=t_final, terminal=outcome is Outcome.TERMINAL,
+        final_position=x_final, final_velocity=v_final,
+        separation_time=S.sep_t.copy(), separation_velocity=S.sep_v.copy(),
+        event_time=event_time, event_contact=np.concatenate(ev_j),
+        event_kind=np.concatenate(ev_k),
+        times=times, positions=positions, velocities=velocities,
+        diagnostics=diagnostics,
+    )
+
+
+def _message(outcome: Outcome, t: float, n: int, events: int, S: K.State) -> str:
+    if outcome is Outcome.TERMINAL:
+        return f"terminal state reached at t = {t:.6g} after {events} events"
+    if outcome is Outcome.STOP_TIME:
+        return f"stopped at t_end = {t:.6g} after {events} events"
+    where = _window_text(S)
+    if outcome is Outcome.EVENT_LIMIT:
+        return f"event limit ({events}) reached at t = {t:.6g}, {where}"
+    if outcome is Outcome.NON_FINITE:
+        return f"state became non-finite at t = {t:.6g}, {where}"
+    return f"step size underflow at t = {t:.6g}, {where}"
+
+
+def _window_text(S: K.State) -> str:
+    ncl = int(S.ints[K.I_NCL])
+    if ncl == 0:
+        return "no ball in contact"
+    parts = [f"balls {S.clo[c] + 1}-{S.chi[c] + 1}" for c in range(min(ncl, 3))]
+    more = f" and {ncl - 3} more clusters" if ncl > 3 else ""
+    return "moving clusters: " + ", ".join(parts) + more

@@ -1,0 +1,990 @@
+"""numba kernels of the event-driven solver: stepping, event location, cluster bookkeeping.
+
+The kernels own the numerics and nothing else: they never see files or Python objects,
+and report through integer status codes that ``_driver`` maps to named outcomes.
+
+State model
+-----------
+A ball is either *free* (no active contact; it moves as ``x + v (t - tref)``) or a
+member of a *cluster*, a maximal run of balls joined by active contacts. Only cluster
+balls are integrated: their state is packed, cluster after cluster, into compact
+arrays and advanced together by the explicit Runge-Kutta pair DOP853 (order 8, dense
+output of order 7). Between events the active set is fixed, so the right-hand side is
+smooth: an active contact carries ``f(c) = c |c|^(alpha-1)``, which is the force for
+``c > 0`` and its odd continuation beyond (for alpha = 1 exactly linear), so a step
+that ends on an opening sees no kink.
+
+Contact states (``cst``)::
+
+    DORMANT  touching at zero compression since t = 0, never pressed; engages when
+             compressed beyond ``LEVEL_DORMANT`` (not logged: it was closed already)
+    FRESH    active, not yet compressed beyond the floor's compression ``eps_rel``;
+             openings fire only below minus the rounding level of its positions
+    ACTIVE   active ("seasoned"); opens exactly where the compression crosses 0
+    OPEN     inactive; closes where the gap reaches 0 with approach speed >= floor,
+             or engages where the compression exceeds ``lvl[j]`` (a slow press)
+
+Events are located on the dense output by sampling each candidate contact at several
+points of the step (an opening can re-close within one step) and bracketing the first
+crossing; the step is then redone from its start to end exactly at the root, refined
+by Newton on the step itself, so no accepted step ever crosses a non-smooth point.
+Free pairs approaching at >= floor are predicted analytically in a binary heap.
+
+References
+----------
+E. Hairer, S. P. Norsett, G. Wanner, Solving Ordinary Differential Equations I,
+Sec. II.4-II.6 (DOP853, dense output, event location).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numba as nb
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+# ---- DOP853 tableau (scipy's copy of Hairer's coefficients) --------------------------
+_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
+_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
+_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
+_E3 = np.ascontiguousarray(_dop.E3, dtype=np.float64)
+_E5 = np.ascontiguousarray(_dop.E5, dtype=np.float64)
+_D = np.ascontiguousarray(_dop.D, dtype=np.float64)
+_NS = 12  # stages of the step proper; row 12 holds f at the step's end (FSAL)
+_NSE = 16  # with the three extra stages of the dense output
+
+# ---- status codes returned by ``advance`` ---------------------------------------------
+ST_TERMINAL = 0
+ST_STOP_TIME = 1
+ST_OUTPUT = 2
+ST_YIELD = 3
+ST_GROW = 4
+ST_FLUSH = 5
+ST_EVENT_LIMIT = 6
+ST_NON_FINITE = 7
+ST_STEP_UNDERFLOW = 8
+
+# ---- contact states -------------------------------------------------------------------
+DORMANT = 3
+FRESH = 1
+ACTIVE = 2
+OPEN = 0
+
+# ---- event kinds (same values as chainrun.solver.EventKind) ---------------------------
+EV_RELEASE = -2
+EV_OPEN = -1
+EV_CLOSE = 1
+EV_ENGAGE = 2
+
+#: compression at which a dormant contact engages: its force c^alpha <= 1e-24 is far
+#: below rounding of order-1 velocities, and it keeps subnormals out of the front.
+LEVEL_DORMANT = 1e-24
+EPS = 2.220446049250313e-16
+N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
+YIELD_STEPS = 20000
+
+# ---- scalar slots ---------------------------------------------------------------------
+# float scalars
+F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
+    F_NFLOAT = range(11)
+# int scalars
+I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
+    I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
+    I_NINT = range(20)
+
+State = namedtuple(
+    "State",
+    [
+        # balls, shape (N,)
+        "bx", "bv", "bt", "sep_t", "sep_v", "bmap",
+        # contacts, shape (N-1,) (at least 1)
+        "cst", "lvl", "stamp",
+        # clusters
+        "clo", "chi", "coff",
+        # compact (integrated) balls
+        "cb", "X", "V", "A", "X0", "V0", "A0", "KX", "KV", "FX", "FV",
+        # heap of free-pair collisions
+        "hp_t", "hp_j", "hp_s",
+        # event log buffer
+        "ev_t", "ev_j", "ev_k",
+        # snapshot buffer
+        "ox", "ov",
+        # scratch lists of ball / contact indices, shape (N,)
+        "freed", "jbuf",
+        # scalars
+        "fs", "ints",
+    ],
+)
+
+
+# =========================================================================================
+# forces
+# =========================================================================================
+@nb.njit(cache=True, inline="always")
+def _force(c, mode, alpha):
+    if mode == 0:
+        return c
+    elif mode == 1:
+        return c * np.sqrt(abs(c))
+    else:
+        if c == 0.0:
+            return 0.0
+        return c * abs(c) ** (alpha - 1.0)
+
+
+@nb.njit(cache=True)
+def _rhs(S, Xs, out):
+    """Accelerations of the compact balls at positions ``Xs`` into ``out``."""
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        e = o + S.chi[c] - S.clo[c]
+        out[o] = 0.0
+        for p in range(o, e):
+            f = _force(Xs[p] - Xs[p + 1], mode, alpha)
+            out[p] -= f
+            out[p + 1] = f
+
+
+# =========================================================================================
+# one DOP853 step for x'' = a(x), y = (x, v), f = (v, a)
+# =========================================================================================
+@nb.njit(cache=True)
+def _step(S, h):
+    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm."""
+    m = S.ints[I_M]
+    KX, KV, X0, V0, A0, X, V = S.KX, S.KV, S.X0, S.V0, S.A0, S.X, S.V
+    for p in range(m):
+        KX[0, p] = V0[p]
+        KV[0, p] = A0[p]
+    for s in range(1, _NS):
+        for p in range(m):
+            dx = 0.0
+            dv = 0.0
+            for i in range(s):
+                a = _A[s, i]
+                if a != 0.0:
+                    dx += a * KX[i, p]
+                    dv += a * KV[i, p]
+            X[p] = X0[p] + h * dx
+            KX[s, p] = V0[p] + h * dv
+        _rhs(S, X, KV[s])
+    for p in range(m):
+        dx = 0.0
+        dv = 0.0
+        for i in range(_NS):
+            dx += _B[i] * KX[i, p]
+            dv += _B[i] * KV[i, p]
+        X[p] = X0[p] + h * dx
+        V[p] = V0[p] + h * dv
+        KX[_NS, p] = V[p]
+    _rhs(S, X, KV[_NS])
+    tol = S.fs[F_TOL]
+    err = 0.0
+    for p in range(m):
+        e5x = 0.0
+        e3x = 0.0
+        e5v = 0.0
+        e3v = 0.0
+        for i in range(_NS + 1):
+            e5x += _E5[i] * KX[i, p]
+            e3x += _E3[i] * KX[i, p]
+            e5v += _E5[i] * KV[i, p]
+            e3v += _E3[i] * KV[i, p]
+        sx = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
+        sv = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
+        d = e5x * e5x + 0.01 * e3x * e3x
+        if d > 0.0:
+            ex = abs(h) * e5x * e5x / np.sqrt(d) / sx
+            if ex > err:
+                err = ex
+        d = e5v * e5v + 0.01 * e3v * e3v
+        if d > 0.0:
+            ev = abs(h) * e5v * e5v / np.sqrt(d) / sv
+            if ev > err:
+                err = ev
+        if not (np.isfinite(X[p]) and np.isfinite(V[p])):
+            return np.inf
+    for p in range(m):
+        S.A[p] = KV[_NS, p]
+    S.ints[I_DENSE] = 0
+    return err
+
+
+@nb.njit(cache=True)
+def _dense(S):
+    """Build the order-7 interpolant of the last accepted step (3 extra stages)."""
+    if S.ints[I_DENSE] == 1:
+        return
+    m = S.ints[I_M]
+    h = S.fs[F_HLAST]
+    KX, KV, X0, V0, X, V, FX, FV = S.KX, S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
+    Xs = FX[6]  # scratch row, overwritten below
+    for s in range(_NS + 1, _NSE):
+        for p in range(m):
+            dx = 0.0
+            dv = 0.0
+            for i in range(s):
+                a = _A[s, i]
+                if a != 0.0:
+                    dx += a * KX[i, p]
+                    dv += a * KV[i, p]
+            Xs[p] = X0[p] + h * dx
+            KX[s, p] = V0[p] + h * dv
+        _rhs(S, Xs, KV[s])
+    for p in range(m):
+        dx = X[p] - X0[p]
+        dv = V[p] - V0[p]
+        FX[0, p] = dx
+        FX[1, p] = h * KX[0, p] - dx
+        FX[2, p] = 2.0 * dx - h * (KX[_NS, p] + KX[0, p])
+        FV[0, p] = dv
+        FV[1, p] = h * KV[0, p] - dv
+        FV[2, p] = 2.0 * dv - h * (KV[_NS, p] + KV[0, p])
+        for r in range(4):
+            sx = 0.0
+            sv = 0.0
+            for i in range(_NSE):
+                d = _D[r, i]
+                if d != 0.0:
+                    sx += d * KX[i, p]
+                    sv += d * KV[i, p]
+            FX[3 + r, p] = h * sx
+            FV[3 + r, p] = h * sv
+    S.ints[I_DENSE] = 1
+
+
+@nb.njit(cache=True, inline="always")
+def _poly(F, y0, p, th):
+    u = 1.0 - th
+    return y0 + th * (F[0, p] + u * (F[1, p] + th * (F[2, p] + u * (F[3, p] + th * (
+        F[4, p] + u * (F[5, p] + th * F[6, p]))))))
+
+
+# =========================================================================================
+# positions of any ball inside the last step (theta in [0, 1]) or now
+# =========================================================================================
+@nb.njit(cache=True)
+def _ball_at(S, b, th):
+    """(x, v) of ball b at t_prev + th * h_last (dense output needs _dense first)."""
+    p = S.bmap[b]
+    if p >= 0:
+        if th >= 1.0:
+            return S.X[p], S.V[p]
+        if th <= 0.0:
+            return S.X0[p], S.V0[p]
+        return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
+    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+
+
+@nb.njit(cache=True)
+def _ball_now(S, b):
+    p = S.bmap[b]
+    if p >= 0:
+        return S.X[p], S.V[p], S.A[p]
+    return S.bx[b] + S.bv[b] * (S.fs[F_T] - S.bt[b]), S.bv[b], 0.0
+
+
+# =========================================================================================
+# heap of free-pair collisions (lazy invalidation by per-contact stamps)
+# =========================================================================================
+@nb.njit(cache=True)
+def _heap_push(S, t, j):
+    n = S.ints[I_NHEAP]
+    if n >= S.hp_t.shape[0]:
+        _heap_compact(S)
+        n = S.ints[I_NHEAP]
+        if n >= S.hp_t.shape[0]:
+            return
+    i = n
+    S.hp_t[i] = t
+    S.hp_j[i] = j
+    S.hp_s[i] = S.stamp[j]
+    S.ints[I_NHEAP] = n + 1
+    while i > 0:
+        q = (i - 1) // 2
+        if S.hp_t[q] <= S.hp_t[i]:
+            break
+        _heap_swap(S, i, q)
+        i = q
+
+
+@nb.njit(cache=True, inline="always")
+def _heap_swap(S, a, b):
+    S.hp_t[a], S.hp_t[b] = S.hp_t[b], S.hp_t[a]
+    S.hp_j[a], S.hp_j[b] = S.hp_j[b], S.hp_j[a]
+    S.hp_s[a], S.hp_s[b] = S.hp_s[b], S.hp_s[a]
+
+
+@nb.njit(cache=True)
+def _heap_pop(S):
+    n = S.ints[I_NHEAP] - 1
+    S.ints[I_NHEAP] = n
+    if n == 0:
+        return
+    _heap_swap(S, 0, n)
+    i = 0
+    while True:
+        l = 2 * i + 1
+        if l >= n:
+            break
+        r = l + 1
+        c = l
+        if r < n and S.hp_t[r] < S.hp_t[l]:
+            c = r
+        if S.hp_t[i] <= S.hp_t[c]:
+            break
+        _heap_swap(S, i, c)
+        i = c
+
+
+@nb.njit(cache=True)
+def _heap_valid_top(S):
+    """Drop stale entries; return whether a valid entry is on top."""
+    while S.ints[I_NHEAP] > 0:
+        j = S.hp_j[0]
+        if S.hp_s[0] == S.stamp[j]:
+            return True
+        _heap_pop(S)
+    return False
+
+
+@nb.njit(cache=True)
+def _heap_compact(S):
+    n = S.ints[I_NHEAP]
+    k = 0
+    for i in range(n):
+        j = S.hp_j[i]
+        if S.hp_s[i] == S.stamp[j]:
+            S.hp_t[k] = S.hp_t[i]
+            S.hp_j[k] = j
+            S.hp_s[k] = S.hp_s[i]
+            k += 1
+    S.ints[I_NHEAP] = k
+    # re-heapify
+    for i in range(k // 2 - 1, -1, -1):
+        q = i
+        while True:
+            l = 2 * q + 1
+            if l >= k:
+                break
+            r = l + 1
+            c = l
+            if r < k and S.hp_t[r] < S.hp_t[l]:
+                c = r
+            if S.hp_t[q] <= S.hp_t[c]:
+                break
+            _heap_swap(S, q, c)
+            q = c
+
+
+@nb.njit(cache=True)
+def _schedule_pair(S, j):
+    """Predict the collision of free balls j, j+1 if they approach at >= floor."""
+    if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
+        return
+    if _find_cluster(S, j) >= 0 or _find_cluster(S, j + 1) >= 0:
+        return
+    w = S.bv[j] - S.bv[j + 1]
+    if not (w >= S.fs[F_FLOOR]):
+        return
+    t = S.fs[F_T]
+    c = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
+    tc = t - c / w if c < 0.0 else t
+    _heap_push(S, tc, j)
+
+
+# =========================================================================================
+# cluster bookkeeping (the list is sorted by lo and small)
+# =========================================================================================
+@nb.njit(cache=True)
+def _find_cluster(S, b):
+    lo = 0
+    hi = S.ints[I_NCL] - 1
+    while lo <= hi:
+        mid = (lo + hi) // 2
+        if S.chi[mid] < b:
+            lo = mid + 1
+        elif S.clo[mid] > b:
+            hi = mid - 1
+        else:
+            return mid
+    return -1
+
+
+@nb.njit(cache=True)
+def _sync(S):
+    """Write the compact state back to the balls (all at the current time)."""
+    t = S.fs[F_T]
+    for p in range(S.ints[I_M]):
+        b = S.cb[p]
+        S.bx[b] = S.X[p]
+        S.bv[b] = S.V[p]
+        S.bt[b] = t
+
+
+@nb.njit(cache=True)
+def _remove_cluster(S, c):
+    n = S.ints[I_NCL]
+    for i in range(c, n - 1):
+        S.clo[i] = S.clo[i + 1]
+        S.chi[i] = S.chi[i + 1]
+    S.ints[I_NCL] = n - 1
+
+
+@nb.njit(cache=True)
+def _insert_cluster(S, lo, hi):
+    n = S.ints[I_NCL]
+    if n >= S.clo.shape[0]:
+        return False
+    i = n
+    while i > 0 and S.clo[i - 1] > lo:
+        S.clo[i] = S.clo[i - 1]
+        S.chi[i] = S.chi[i - 1]
+        i -= 1
+    S.clo[i] = lo
+    S.chi[i] = hi
+    S.ints[I_NCL] = n + 1
+    return True
+
+
+@nb.njit(cache=True)
+def _touch_ball(S, b):
+    """Invalidate predictions involving ball b."""
+    if b - 1 >= 0:
+        S.stamp[b - 1] += 1
+    if b < S.stamp.shape[0]:
+        S.stamp[b] += 1
+
+
+@nb.njit(cache=True)
+def _free_ball(S, b):
+    S.sep_t[b] = S.fs[F_T]
+    S.sep_v[b] = S.bv[b]
+    S.bmap[b] = -1
+    _touch_ball(S, b)
+    n = S.ints[I_NFREED]
+    S.freed[n] = b
+    S.ints[I_NFREED] = n + 1
+
+
+@nb.njit(cache=True)
+def _activate(S, j, state):
+    """Make contact j active, joining the clusters/balls on both sides."""
+    S.cst[j] = state
+    cl = _find_cluster(S, j)
+    cr = _find_cluster(S, j + 1)
+    lo = j
+    hi = j + 1
+    if cl >= 0:
+        lo = S.clo[cl]
+    else:
+        _touch_ball(S, j)
+    if cr >= 0:
+        hi = S.chi[cr]
+        _remove_cluster(S, cr)
+    else:
+        _touch_ball(S, j + 1)
+    if cl >= 0:
+        _remove_cluster(S, cl)
+    ok = _insert_cluster(S, lo, hi)
+    S.ints[I_DIRTY] = 1
+    return ok
+
+
+@nb.njit(cache=True)
+def _deactivate(S, j, level):
+    """Make contact j inactive (engages again beyond ``level``), splitting its cluster."""
+    S.cst[j] = OPEN
+    S.lvl[j] = level
+    c = _find_cluster(S, j)
+    if c < 0:
+        return True
+    lo = S.clo[c]
+    hi = S.chi[c]
+    _remove_cluster(S, c)
+    ok = True
+    if j > lo:
+        ok = ok and _insert_cluster(S, lo, j)
+    else:
+        _free_ball(S, j)
+    if j + 1 < hi:
+        ok = ok and _insert_cluster(S, j + 1, hi)
+    else:
+        _free_ball(S, j + 1)
+    S.ints[I_DIRTY] = 1
+    return ok
+
+
+@nb.njit(cache=True)
+def _rebuild(S):
+    """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
+    ncl = S.ints[I_NCL]
+    m = 0
+    for c in range(ncl):
+        m += S.chi[c] - S.clo[c] + 1
+    if m > S.X.shape[0]:
+        return m
+    for p in range(S.ints[I_M]):
+        b = S.cb[p]
+        if _find_cluster(S, b) < 0:
+            S.bmap[b] = -1
+    t = S.fs[F_T]
+    p = 0
+    for c in range(ncl):
+        S.coff[c] = p
+        for b in range(S.clo[c], S.chi[c] + 1):
+            S.cb[p] = b
+            S.X[p] = S.bx[b] + S.bv[b] * (t - S.bt[b])
+            S.V[p] = S.bv[b]
+            S.bmap[b] = p
+            p += 1
+    S.ints[I_M] = m
+    if m > S.ints[I_MAXWIN]:
+        S.ints[I_MAXWIN] = m
+    _rhs(S, S.X, S.A)
+    S.ints[I_DIRTY] = 0
+    S.ints[I_DENSE] = 0
+    # balls that just lost their last contact may be on course to hit a free neighbour
+    for i in range(S.ints[I_NFREED]):
+        b = S.freed[i]
+        _schedule_pair(S, b - 1)
+        _schedule_pair(S, b)
+    S.ints[I_NFREED] = 0
+    return 0
+
+
+# =========================================================================================
+# events
+# =========================================================================================
+@nb.njit(cache=True)
+def _log(S, t, j, kind):
+    n = S.ints[I_NEV]
+    S.ev_t[n] = t
+    S.ev_j[n] = j
+    S.ev_k[n] = kind
+    S.ints[I_NEV] = n + 1
+    S.ints[I_EVTOTAL] += 1
+
+
+@nb.njit(cache=True)
+def _contact_at(S, j, th):
+    xl, vl = _ball_at(S, j, th)
+    xr, vr = _ball_at(S, j + 1, th)
+    return xl - xr, vl - vr, abs(xl) + abs(xr)
+
+
+@nb.njit(cache=True)
+def _crossing(S, j, ta, tb, ca, cb_, level):
+    """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi."""
+    fa = ca - level
+    fb = cb_ - level
+    side = 0
+    for _ in range(100):
+        if tb - ta <= 4.0 * EPS * max(1.0, tb):
+            break
+        tm = tb - fb * (tb - ta) / (fb - fa) if fb != fa else 0.5 * (ta + tb)
+        if not (tm > ta and tm < tb):
+            tm = 0.5 * (ta + tb)
+        cm, _w, _s = _contact_at(S, j, tm)
+        fm = cm - level
+        if fm == 0.0:
+            return tm
+        if (fm > 0.0) == (fa > 0.0):
+            ta = tm
+            fa = fm
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            tb = tm
+            fb = fm
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    # the side past the level, so the event is not missed by a hair
+    return tb
+
+
+@nb.njit(cache=True)
+def _rounding(scale):
+    return 16.0 * EPS * max(1.0, scale)
+
+
+@nb.njit(cache=True, inline="always")
+def _may_cross(c0, c1, reach, level):
+    return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
+
+
+@nb.njit(cache=True)
+def _contact_event(S, j, hcap):
+    """Earliest event of contact j in the last step before ``hcap``.
+
+    Returns (theta, kind, level), theta = 2 when there is none. The kind says what
+    crossing was found; the caller sets the contact's new state from it.
+    """
+    st = S.cst[j]
+    c0, w0, s0 = _contact_at(S, j, 0.0)
+    c1, w1, s1 = _contact_at(S, j, 1.0)
+    # bound on how far c can stray from its end values inside the step: h^2/8 |c''|,
+    # with c'' taken at both ends and a safety factor of 4
+    pa = S.bmap[j]
+    pb = S.bmap[j + 1]
+    g = 0.0
+    if pa >= 0:
+        g = max(abs(S.A0[pa]), abs(S.A[pa]))
+    if pb >= 0:
+        g += max(abs(S.A0[pb]), abs(S.A[pb]))
+    h = S.fs[F_HLAST]
+    reach = 0.5 * h * h * g
+    if st == ACTIVE or st == FRESH:
+        lev1 = 0.0 if st == ACTIVE else -_rounding(max(s0, s1))
+        lev2 = lev1
+    elif st == DORMANT:
+        lev1 = LEVEL_DORMANT
+        lev2 = -S.fs[F_EPSREL]
+    else:
+        lev1 = 0.0
+        lev2 = S.lvl[j]
+    if not (_may_cross(c0, c1, reach, lev1) or _may_cross(c0, c1, reach, lev2)):
+        return 2.0, 0, 0.0
+    _dense(S)
+    floor = S.fs[F_FLOOR]
+    ta = 0.0
+    ca = c0
+    for i in range(1, N_SAMPLES + 1):
+        tb = i / N_SAMPLES
+        if tb >= hcap:
+            tb = hcap
+        cb_ = c1 if tb >= 1.0 else _contact_at(S, j, tb)[0]
+        if st == ACTIVE or st == FRESH:
+            if ca > lev1 and cb_ <= lev1:
+                return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_OPEN, lev1
+        elif st == DORMANT:
+            if ca < lev1 and cb_ >= lev1:
+                return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_ENGAGE, lev1
+            if ca > lev2 and cb_ <= lev2:
+                return _crossing(S, j, ta, tb, ca, cb_, lev2), EV_RELEASE, lev2
+        else:
+            if ca < 0.0 and cb_ >= 0.0:
+                tr = _crossing(S, j, ta, tb, ca, cb_, 0.0)
+                if _contact_at(S, j, tr)[1] >= floor:
+                    return tr, EV_CLOSE, 0.0
+            if ca < lev2 and cb_ >= lev2:
+                return _crossing(S, j, ta, tb, ca, cb_, lev2), EV_ENGAGE, lev2
+        ta = tb
+        ca = cb_
+        if tb >= hcap:
+            break
+    return 2.0, 0, 0.0
+
+
+@nb.njit(cache=True)
+def _find_event(S):
+    """Scan the contacts touching clusters for the earliest event of the last step."""
+    best = 2.0
+    bj = -1
+    bk = 0
+    blev = 0.0
+    ncont = S.cst.shape[0]
+    for c in range(S.ints[I_NCL]):
+        j0 = S.clo[c] - 1
+        j1 = S.chi[c]
+        if j0 < 0:
+            j0 = 0
+        if j1 > ncont - 1:
+            j1 = ncont - 1
+        for j in range(j0, j1 + 1):
+            # a boundary shared by two clusters is seen twice: skip the second
+            if j == S.clo[c] - 1 and c > 0 and S.chi[c - 1] == j:
+                continue
+            th, kind, lev = _contact_event(S, j, best)
+            if th < best:
+                best = th
+                bj = j
+                bk = kind
+                blev = lev
+    return best, bj, bk, blev
+
+
+# =========================================================================================
+# the step loop
+# =========================================================================================
+@nb.njit(cache=True)
+def _save_start(S):
+    for p in range(S.ints[I_M]):
+        S.X0[p] = S.X[p]
+        S.V0[p] = S.V[p]
+        S.A0[p] = S.A[p]
+
+
+@nb.njit(cache=True)
+def _restore_start(S):
+    for p in range(S.ints[I_M]):
+        S.X[p] = S.X0[p]
+        S.V[p] = S.V0[p]
+        S.A[p] = S.A0[p]
+
+
+@nb.njit(cache=True)
+def _snapshot(S, tout):
+    """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
+    t = S.fs[F_T]
+    tp = S.fs[F_TPREV]
+    hl = S.fs[F_HLAST]
+    th = 1.0
+    if tout < t and S.ints[I_JUMP] == 0 and hl > 0.0:
+        th = (tout - tp) / hl
+        if th < 0.0:
+            th = 0.0
+        _dense(S)
+    for b in range(S.bx.shape[0]):
+        p = S.bmap[b]
+        if p >= 0:
+            if th >= 1.0:
+                S.ox[b] = S.X[p]
+                S.ov[b] = S.V[p]
+            else:
+                S.ox[b] = _poly(S.FX, S.X0[p], p, th)
+                S.ov[b] = _poly(S.FV, S.V0[p], p, th)
+        else:
+            S.ox[b] = S.bx[b] + S.bv[b] * (tout - S.bt[b])
+            S.ov[b] = S.bv[b]
+
+
+@nb.njit(cache=True)
+def _apply_event(S, j, kind):
+    """Set contact j's state from the event just reached (positions are synced)."""
+    t = S.fs[F_T]
+    if kind == EV_OPEN or kind == EV_RELEASE:
+        ok = _deactivate(S, j, S.fs[F_EPSREL])
+        _log(S, t, j, kind)
+    elif kind == EV_CLOSE:
+        ok = _activate(S, j, ACTIVE)
+        _log(S, t, j, EV_CLOSE)
+    else:
+        dormant = S.cst[j] == DORMANT
+        ok = _activate(S, j, FRESH if dormant else ACTIVE)
+        if not dormant:  # a dormant contact was closed already: nothing to log
+            _log(S, t, j, EV_ENGAGE)
+    return ok
+
+
+@nb.njit(cache=True)
+def _release_quiet(S):
+    """Season contacts pressed beyond eps_rel; release those below the floor.
+
+    A seasoned contact is released when its relative motion and stored energy could
+    not produce a speed above the floor (w^2 + 4 c^(alpha+1)/(alpha+1) < floor^2) and
+    its neighbours do not load it (|c''| < floor). Fresh contacts (at the front of a
+    wave, still below eps_rel) are never released.
+    """
+    floor = S.fs[F_FLOOR]
+    epsrel = S.fs[F_EPSREL]
+    alpha = S.fs[F_ALPHA]
+    nrel = 0
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        lo = S.clo[c]
+        for j in range(lo, S.chi[c]):
+            p = o + j - lo
+            st = S.cst[j]
+            cj = S.X[p] - S.X[p + 1]
+            if st == FRESH:
+                if cj > epsrel:
+                    S.cst[j] = ACTIVE
+            elif st == ACTIVE:
+                w = S.V[p] - S.V[p + 1]
+                cp = cj if cj > 0.0 else 0.0
+                e = w * w + 4.0 * cp ** (alpha + 1.0) / (alpha + 1.0)
+                if e < floor * floor and abs(S.A[p] - S.A[p + 1]) < floor:
+                    S.jbuf[nrel] = j
+                    nrel += 1
+    if nrel == 0:
+        return True
+    _sync(S)
+    t = S.fs[F_T]
+    for i in range(nrel):
+        j = S.jbuf[i]
+        cj = S.bx[j] - S.bx[j + 1]
+        if not _deactivate(S, j, max(cj, 0.0) + epsrel):
+            return False
+        _log(S, t, j, EV_RELEASE)
+    return True
+
+
+@nb.njit(cache=True)
+def _engage_overlaps(S):
+    """After a change of structure: engage boundary contacts already pressed past their level."""
+    t = S.fs[F_T]
+    ncont = S.cst.shape[0]
+    changed = True
+    while changed:
+        changed = False
+        for c in range(S.ints[I_NCL]):
+            for j in (S.clo[c] - 1, S.chi[c]):
+                if j < 0 or j >= ncont:
+                    continue
+                st = S.cst[j]
+                if st != OPEN and st != DORMANT:
+                    continue
+                cj = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
+                lev = LEVEL_DORMANT if st == DORMANT else S.lvl[j]
+                if cj >= lev:
+                    if not _apply_event(S, j, EV_ENGAGE):
+                        return False
+                    changed = True
+                    break
+            if changed:
+                break
+    return True
+
+
+@nb.njit(cache=True)
+def _post_step(S):
+    """After an accepted step or jump: apply its event, or season and release contacts."""
+    k = S.ints[I_EVK]
+    if k != 0:
+        S.ints[I_EVK] = 0
+        _sync(S)
+        if not _apply_event(S, S.ints[I_EVJ], k):
+            return False
+    elif S.ints[I_M] > 0:
+        if not _release_quiet(S):
+            return False
+    if S.ints[I_DIRTY] == 1:
+        return _engage_overlaps(S)
+    return True
+
+
+@nb.njit(cache=True)
+def _end_ball(S, b, t):
+    p = S.bmap[b]
+    if p >= 0:
+        return S.X[p], S.V[p], S.A[p]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b], 0.0
+
+
+@nb.njit(cache=True)
+def advance(S):
+    """Run until something needs the driver; return a status code (ST_*).
+
+    The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
+    snapshot, empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW
+    and calls again.
+    """
+    nsteps = 0
+    while True:
+        if S.ints[I_DIRTY] == 1:
+            need = _rebuild(S)
+            if need > 0:
+                S.ints[I_NEED] = need
+                return ST_GROW
+        t = S.fs[F_T]
+        # snapshots inside the last step, before its event reshapes the clusters
+        if S.ints[I_HAVEOUT] == 1 and S.fs[F_TOUT] <= t:
+            _snapshot(S, S.fs[F_TOUT])
+            S.ints[I_HAVEOUT] = 0
+            return ST_OUTPUT
+        if S.ints[I_POST] == 1:
+            if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 4:
+                return ST_FLUSH
+            S.ints[I_POST] = 0
+            if not _post_step(S):
+                return ST_GROW
+            continue
+        if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
+            return ST_EVENT_LIMIT
+        tend = S.fs[F_TEND]
+        # next free-pair collision
+        tcol = np.inf
+        if _heap_valid_top(S):
+            tcol = S.hp_t[0]
+            if tcol <= t:
+                j = S.hp_j[0]
+                _heap_pop(S)
+                S.ints[I_EVJ] = j
+                S.ints[I_EVK] = EV_CLOSE
+                S.ints[I_POST] = 1
+                continue
+        if t >= tend:
+            return ST_STOP_TIME
+        if S.ints[I_NCL] == 0:
+            if tcol == np.inf:
+                return ST_TERMINAL
+            # free flight: jump straight to the next collision (or the stop time)
+            tn = min(tcol, tend)
+            S.fs[F_TPREV] = t
+            S.fs[F_HLAST] = tn - t
+            S.fs[F_T] = tn
+            S.ints[I_JUMP] = 1
+            continue
+        nsteps += 1
+        if nsteps > YIELD_STEPS:
+            return ST_YIELD
+        # ---- one accepted step, ending at the earliest event if there is one ------------
+        h = S.fs[F_H]
+        tclip = min(tcol, tend)
+        clipped = False
+        if t + h >= tclip:
+            h = tclip - t
+            clipped = True
+        _save_start(S)
+        while True:
+            err = _step(S, h)
+            if not np.isfinite(err):
+                if h < 1e-12 * max(1.0, abs(t)):
+                    return ST_NON_FINITE
+                h *= 0.2
+                S.ints[I_REJ] += 1
+                clipped = False
+                continue
+            if err <= 1.0:
+                break
+            S.ints[I_REJ] += 1
+            h *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+            clipped = False
+            if h < 8.0 * EPS * max(1.0, abs(t)):
+                return ST_STEP_UNDERFLOW
+        hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
+        S.fs[F_TPREV] = t
+        S.fs[F_HLAST] = h
+        S.ints[I_JUMP] = 0
+        th, j, kind, lev = _find_event(S)
+        if j >= 0:
+            # redo the step to end on the event, then refine by Newton on the step itself
+            hev = th * h
+            good = True
+            for _ in range(6):
+                if not (_step(S, hev) <= 1.0):
+                    good = False
+                    break
+                xl, vl, al = _end_ball(S, j, t + hev)
+                xr, vr, ar = _end_ball(S, j + 1, t + hev)
+                res = (xl - xr) - lev
+                w = vl - vr
+                if abs(res) <= _rounding(abs(xl) + abs(xr)) or w == 0.0:
+                    break
+                dh = -res / w
+                if abs(dh) > 0.5 * hev:
+                    break
+                hev += dh
+            if not good:
+                # the shorter step failed its error test: halve it and look again
+                _restore_start(S)
+                S.fs[F_H] = 0.5 * hev
+                S.ints[I_REJ] += 1
+                continue
+            S.fs[F_HLAST] = hev
+            S.fs[F_T] = t + hev
+            S.ints[I_EVJ] = j
+            S.ints[I_EVK] = kind
+            S.fs[F_H] = hnext
+        else:
+            S.fs[F_T] = tclip if clipped else t + h
+            S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
+        S.ints[I_STEPS] += 1
+        S.ints[I_POST] = 1

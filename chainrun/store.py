@@ -1,0 +1,848 @@
+"""Run files and index files: the one module of chainrun that reads and writes HDF5.
+
+This module owns the on-disk format. A *run file* holds one run (one point of a
+sweep): its parameters and full config text, the snapshots of positions and
+velocities, the energies and momentum at each snapshot, the contact event log, the
+final and separation velocities of every ball and the solver's diagnostics. An
+*index file* lists the runs of one experiment as a table and links to each run file.
+The tree of both files is drawn in ``docs/schema.md``; change it together with
+``RUN_FORMAT_VERSION`` or ``INDEX_FORMAT_VERSION``.
+
+Run files follow H5MD 1.1 [1]_ with spatial dimension 1 (``/h5md``, ``/particles``,
+``/observables``, ``/parameters``); ``/results``, ``/events`` and ``/diagnostics``
+are chainrun's own groups, which H5MD allows. Every dataset carries netCDF-4
+dimension scales (``time``, ``ball``, ``spatial``, ``event``), so
+``xarray.open_datatree(path, engine="h5netcdf")`` opens a run file with named
+dimensions.
+
+Files are written to a temporary name beside the target (``.<name>.partial-<pid>``),
+flushed to disk and renamed over the target only when complete, so a reader never
+sees a half-written file under the final name.
+
+References
+----------
+.. [1] P. de Buyl, P. H. Colberg and F. Höfling, "H5MD: A structured, efficient,
+   and portable file format for molecular data", Comput. Phys. Commun. 185, 1546
+   (2014); specification 1.1 at https://www.nongnu.org/h5md/
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import json
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+import h5py
+import numpy as np
+
+import chainrun
+from chainrun.config import RunSpec
+from chainrun.errors import StoreError
+from chainrun.solver import EventKind, Solution
+from chainrun.solver import physics
+
+__all__ = [
+    "INDEX_FORMAT",
+    "INDEX_FORMAT_VERSION",
+    "RUN_FORMAT",
+    "RUN_FORMAT_VERSION",
+    "RunData",
+    "RunWriter",
+    "Snapshots",
+    "check_format",
+    "read_index",
+    "read_run",
+    "write_index",
+    "write_run",
+]
+
+#: Format name and version of a run file (root attributes ``format``, ``format_version``).
+RUN_FORMAT = "chainrun-run"
+RUN_FORMAT_VERSION = 1
+#: Format name and version of an experiment's index file.
+INDEX_FORMAT = "chainrun-index"
+INDEX_FORMAT_VERSION = 1
+_FORMAT_VERSIONS = {RUN_FORMAT: RUN_FORMAT_VERSION, INDEX_FORMAT: INDEX_FORMAT_VERSION}
+
+#: H5MD specification version the run files conform to (major, minor).
+H5MD_VERSION = (1, 1)
+
+#: Chunk length along the ball axis of large arrays (2**16 float64 = 512 KiB).
+BALL_CHUNK = 2**16
+#: Arrays with more elements than this are chunked and compressed.
+COMPRESS_ABOVE = 4096
+_GZIP = dict(compression="gzip", compression_opts=1, shuffle=True)
+
+# HDF5 1.8 object headers: large attributes (the config text) go to dense storage.
+_LIBVER = "v108"
+
+#: The names of the observables written at each snapshot.
+OBSERVABLES = ("kinetic_energy", "potential_energy", "momentum")
+
+#: Columns every index entry must have, in table order, with their dtype.
+INDEX_COLUMNS: dict[str, str] = {
+    "run_id": "str",
+    "file": "str",
+    "n": "int",
+    "k": "int",
+    "alpha": "float",
+    "outcome": "str",
+    "terminal": "bool",
+    "end_time": "float",
+    "events": "int",
+    "wall_time": "float",
+    "config_hash": "str",
+}
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def _author() -> str:
+    return os.environ.get("USER") or "chainrun user"
+
+
+def _fixed_str(value: str) -> np.ndarray:
+    """A scalar fixed-length UTF-8 string, as H5MD asks for its metadata."""
+    raw = value.encode("utf-8") or b" "
+    return np.array(raw, dtype=h5py.string_dtype("utf-8", len(raw)))
+
+
+def _as_str(value: Any) -> str:
+    if isinstance(value, np.ndarray) and value.shape == ():
+        value = value[()]
+    if isinstance(value, (bytes, np.bytes_)):
+        return bytes(value).decode("utf-8")
+    return str(value)
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serializable")
+
+
+def _to_json(obj: Any) -> str:
+    return json.dumps(obj, sort_keys=True, default=_json_default)
+
+
+def _py(value: Any) -> Any:
+    """An HDF5 attribute value as a plain Python object."""
+    if isinstance(value, (bytes, np.bytes_)):
+        return bytes(value).decode("utf-8")
+    if isinstance(value, np.ndarray):
+        return [_py(v) for v in value.tolist()] if value.ndim else _py(value[()])
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _group(parent: h5py.Group, name: str) -> h5py.Group:
+    return parent.create_group(name, track_order=True)
+
+
+def _scale(group: h5py.Group, name: str, data: np.ndarray, long_name: str) -> h5py.Dataset:
+    """A 1-d dataset that is also the netCDF dimension ``name`` of its group."""
+    ds = _array(group, name, data, [], long_name)
+    ds.make_scale(name)
+    return ds
+
+
+def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],
+           long_name: str, dtype=None) -> h5py.Dataset:
+    """A fixed-size dataset, chunked and compressed when large, with dims attached."""
+    data = np.asarray(data, dtype=dtype)
+    opts: dict[str, Any] = {}
+    if data.size > COMPRESS_ABOVE:
+        opts = dict(chunks=(min(data.shape[0], BALL_CHUNK),) + data.shape[1:], **_GZIP)
+    ds = group.create_dataset(name, data=data, **opts)
+    for axis, scale in enumerate(scales):
+        ds.dims[axis].attach_scale(scale)
+    ds.attrs["long_name"] = long_name
+    return ds
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _fsync_dir(directory: Path) -> None:
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:  # not possible on every platform; the rename is still atomic
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _temp_name(path: Path) -> Path:
+    return path.with_name(f".{path.name}.partial-{os.getpid()}")
+
+
+def _create(path: Path, temp: Path, what: str) -> h5py.File:
+    if not path.parent.is_dir():
+        raise StoreError(f"{path}: cannot create {what} (no folder {path.parent})")
+    try:
+        return h5py.File(temp, "w", libver=_LIBVER, track_order=True)
+    except OSError as exc:
+        found = re.search(r"error message = '([^']*)'", str(exc))
+        reason = found.group(1) if found else str(exc).splitlines()[0]
+        raise StoreError(f"{path}: cannot create {what} ({reason})") from exc
+
+
+def _commit(h5: h5py.File, temp: Path, path: Path) -> None:
+    """Flush and close ``h5``, fsync it and rename it over ``path``."""
+    h5.flush()
+    h5.close()
+    _fsync(temp)
+    os.replace(temp, path)
+    _fsync_dir(path.parent)
+
+
+def _discard(h5: h5py.File | None, temp: Path) -> None:
+    if h5 is not None:
+        try:
+            h5.close()
+        except Exception:  # already closed or broken: removing the file is what matters
+            pass
+    try:
+        os.unlink(temp)
+    except FileNotFoundError:
+        pass
+
+
+def _stamp(h5: h5py.File, fmt: str) -> None:
+    h5.attrs["format"] = fmt
+    h5.attrs["format_version"] = np.int64(_FORMAT_VERSIONS[fmt])
+    h5.attrs["created"] = _now()
+
+
+# ------------------------------------------------------------------ format checking
+
+
+def check_format(path_or_h5file, expected: str = RUN_FORMAT) -> int:
+    """Check that a file is a chainrun file of the expected format and a known version.
+
+    Parameters
+    ----------
+    path_or_h5file : str, path or h5py.File
+    expected : {"chainrun-run", "chainrun-index"}
+
+    Returns
+    -------
+    int
+        The file's format version.
+
+    Raises
+    ------
+    StoreError
+        With a one-line message naming the file: missing, truncated or not HDF5, of
+        another format, or of an unsupported format version.
+    """
+    if expected not in _FORMAT_VERSIONS:
+        raise ValueError(f"unknown chainrun format {expected!r}")
+    if isinstance(path_or_h5file, (h5py.File, h5py.Group)):
+        return _check_open(path_or_h5file.file, path_or_h5file.file.filename, expected)
+    name = os.fspath(path_or_h5file)
+    with _open_read(name) as h5:
+        return _check_open(h5, name, expected)
+
+
+def _open_read(name: str) -> h5py.File:
+    if not os.path.exists(name):
+        raise StoreError(f"{name}: no such file")
+    try:
+        return h5py.File(name, "r")
+    except OSError as exc:
+        raise StoreError(f"{name}: truncated or not HDF5") from exc
+
+
+def _check_open(h5: h5py.File, name: str, expected: str) -> int:
+    noun = expected.removeprefix("chainrun-")
+    fmt = h5.attrs.get("format")
+    if fmt is None:
+        raise StoreError(f"{name}: not a chainrun {noun} file (no format attribute)")
+    fmt = _as_str(fmt)
+    if fmt != expected:
+        raise StoreError(f"{name}: not a chainrun {noun} file (format {fmt!r})")
+    try:
+        version = int(h5.attrs["format_version"])
+    except (KeyError, TypeError, ValueError):
+        raise StoreError(f"{name}: {fmt} file without a valid format_version") from None
+    supported = _FORMAT_VERSIONS[expected]
+    if version != supported:
+        raise StoreError(
+            f"{name}: format version {version} is not supported (expected {supported})"
+        )
+    return version
+
+
+# ----------------------------------------------------------------------- run files
+
+
+class _Element:
+    """An H5MD time-dependent element (``step``, ``time``, ``value``) that grows by rows."""
+
+    def __init__(self, group: h5py.Group, name: str, item_shape: tuple[int, ...],
+                 item_scales: list[h5py.Dataset], chunk_hint: int, long_name: str):
+        self.group = g = _group(group, name)
+        rows = max(1, min(chunk_hint, 4096))
+        self.time = g.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8",
+                                     chunks=(rows,))
+        self.time.make_scale("time")
+        self.time.attrs["long_name"] = "time of the snapshot"
+        self.step = g.create_dataset("step", shape=(0,), maxshape=(None,), dtype="i8",
+                                     chunks=(rows,))
+        self.step.dims[0].attach_scale(self.time)
+        self.step.attrs["long_name"] = "snapshot index"
+        if item_shape:  # (N, 1): one snapshot per chunk row, compressed
+            opts = dict(chunks=(1, min(item_shape[0], BALL_CHUNK)) + item_shape[1:], **_GZIP)
+        else:
+            opts = dict(chunks=(rows,))
+        self.value = g.create_dataset("value", shape=(0,) + item_shape,
+                                      maxshape=(None,) + item_shape, dtype="f8", **opts)
+        self.value.dims[0].attach_scale(self.time)
+        for axis, scale in enumerate(item_scales, start=1):
+            self.value.dims[axis].attach_scale(scale)
+        self.value.attrs["long_name"] = long_name
+
+    def append(self, row: int, step: int, t: float, value) -> None:
+        for ds in (self.time, self.step, self.value):
+            ds.resize(row + 1, axis=0)
+        self.time[row] = t
+        self.step[row] = step
+        self.value[row] = value
+
+
+class RunWriter:
+    """Write one run file, snapshot by snapshot, then atomically put it in place.
+
+    Use as a context manager. ``snapshot`` has the signature of the solver's
+    ``on_snapshot`` hook and writes each snapshot at once (nothing is kept in
+    memory); ``finish`` writes the results, events and diagnostics, closes the file
+    and renames it to ``path``. Leaving the ``with`` block by an exception, or
+    without calling ``finish``, deletes the temporary file: nothing appears under
+    ``path``. An existing file at ``path`` is replaced.
+
+    Parameters
+    ----------
+    path : str or path
+        The run file to create.
+    spec : RunSpec
+        The run; its parameters and config text are written at once.
+    velocity_floor : float
+        The solver's velocity floor (``chainrun.solver.velocity_floor(spec.rtol)``).
+
+    Examples
+    --------
+    >>> with RunWriter("results/runs/k=2.h5", spec, velocity_floor=1e-12) as w:
+    ...     sol = simulate(spec.n, spec.k, spec.alpha, spec.times, on_snapshot=w.snapshot)
+    ...     w.finish(sol)
+    """
+
+    def __init__(self, path, spec: RunSpec, *, velocity_floor: float):
+        self.path = Path(path)
+        self.temp_path = _temp_name(self.path)
+        self._spec = spec
+        self._n = int(spec.n)
+        self._alpha = float(spec.alpha)
+        self._rows = 0
+        self._done = False
+        self._h5: h5py.File | None = _create(self.path, self.temp_path, "run file")
+        try:
+            self._write_header(float(velocity_floor))
+        except BaseException:
+            self.abort()
+            raise
+
+    # -- layout ------------------------------------------------------------------
+
+    def _write_header(self, velocity_floor: float) -> None:
+        h5, spec, n = self._h5, self._spec, self._n
+        _stamp(h5, RUN_FORMAT)
+
+        meta = _group(h5, "h5md")
+        meta.attrs["version"] = np.array(H5MD_VERSION, dtype=np.int32)
+        _group(meta, "author").attrs["name"] = _fixed_str(_author())
+        creator = _group(meta, "creator")
+        creator.attrs["name"] = _fixed_str("chainrun")
+        creator.attrs["version"] = _fixed_str(chainrun.__version__)
+
+        params = _group(h5, "parameters")
+        a = params.attrs
+        a["n"] = np.int64(n)
+        a["k"] = np.int64(spec.k)
+        a["alpha"] = np.float64(spec.alpha)
+        a["t_end"] = np.float64(np.nan if spec.t_end is None else spec.t_end)
+        a["rtol"] = np.float64(spec.rtol)
+        a["max_events"] = np.int64(-1 if spec.max_events is None else spec.max_events)
+        a["velocity_floor"] = np.float64(velocity_floor)
+        a["experiment"] = str(spec.experiment)
+        a["run_id"] = str(spec.run_id)
+        a["config_hash"] = str(spec.config_hash)
+        a["config"] = str(spec.source_text)
+        a["config_resolved"] = _to_json(spec.config)
+        a["overrides"] = _to_json(spec.overrides)
+
+        chain = _group(_group(h5, "particles"), "chain")
+        box = _group(chain, "box")
+        box.attrs["dimension"] = np.int32(1)
+        box.attrs["boundary"] = np.array([b"none"], dtype=h5py.string_dtype("ascii", 4))
+        ball = _scale(chain, "ball", np.arange(1, n + 1, dtype=np.int64),
+                      "ball number n = 1..N (ball 1 is struck first)")
+        spatial = _scale(chain, "spatial", np.array(["x"], dtype=h5py.string_dtype()),
+                         "spatial axis")
+        hint = len(np.atleast_1d(spec.times))
+        self._position = _Element(chain, "position", (n, 1), [ball, spatial], hint,
+                                  "displacement x_n from the initial touching position")
+        self._velocity = _Element(chain, "velocity", (n, 1), [ball, spatial], hint,
+                                  "velocity dx_n/dt")
+        obs = _group(h5, "observables")
+        self._observables = {
+            "kinetic_energy": _Element(obs, "kinetic_energy", (), [], hint,
+                                       "sum v^2/2"),
+            "potential_energy": _Element(obs, "potential_energy", (), [], hint,
+                                         "sum c_+^(alpha+1)/(alpha+1), c_j = x_j - x_j+1"),
+            "momentum": _Element(obs, "momentum", (), [], hint, "sum v"),
+        }
+
+    # -- writing -----------------------------------------------------------------
+
+    def _live(self) -> h5py.File:
+        if self._h5 is None:
+            raise StoreError(f"{self.path}: run writer is closed")
+        return self._h5
+
+    def snapshot(self, index: int, t: float, x: np.ndarray, v: np.ndarray) -> None:
+        """Write one snapshot now (``x``, ``v`` need only be valid during the call).
+
+        Parameters
+        ----------
+        index : int
+            Snapshot index (stored as H5MD ``step``).
+        t : float
+        x, v : ndarray, shape (N,)
+            Displacements and velocities.
+        """
+        self._live()
+        x = np.asarray(x, dtype=np.float64)
+        v = np.asarray(v, dtype=np.float64)
+        if x.shape != (self._n,) or v.shape != (self._n,):
+            raise ValueError(
+                f"snapshot arrays must have shape ({self._n},); got {x.shape} and {v.shape}"
+            )
+        row = self._rows
+        self._position.append(row, index, t, x[:, None])
+        self._velocity.append(row, index, t, v[:, None])
+        values = {
+            "kinetic_energy": physics.kinetic_energy(v),
+            "potential_energy": physics.potential_energy(x, self._alpha),
+            "momentum": physics.momentum(v),
+        }
+        for name, element in self._observables.items():
+            element.append(row, index, t, values[name])
+        self._rows = row + 1
+
+    def finish(self, solution: Solution) -> None:
+        """Write results, events and diagnostics; close; rename to ``path``."""
+        h5 = self._live()
+        try:
+            self._write_solution(h5, solution)
+            self._h5 = None
+            _commit(h5, self.temp_path, self.path)
+        except BaseException:
+            self._h5 = h5
+            self.abort()
+            raise
+        self._done = True
+
+    def _write_solution(self, h5: h5py.File, sol: Solution) -> None:
+        n = self._n
+        if int(sol.n) != n:
+            raise StoreError(f"{self.path}: solution has n = {sol.n}, run spec n = {n}")
+        results = _group(h5, "results")
+        ball = _scale(results, "ball", np.arange(1, n + 1, dtype=np.int64),
+                      "ball number n = 1..N")
+        for name, long_name in (
+            ("final_velocity", "velocity at end_time"),
+            ("final_position", "displacement at end_time"),
+            ("separation_velocity", "velocity when the ball last lost contact (NaN: never)"),
+            ("separation_time", "time when the ball last lost contact (NaN: never)"),
+        ):
+            data = np.asarray(getattr(sol, name), dtype=np.float64)
+            if data.shape != (n,):
+                raise StoreError(f"{self.path}: {name} has shape {data.shape}, expected ({n},)")
+            _array(results, name, data, [ball], long_name)
+        results.attrs["end_time"] = np.float64(sol.end_time)
+        results.attrs["terminal"] = np.bool_(sol.terminal)
+        results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
+        results.attrs["message"] = str(sol.message)
+
+        events = _group(h5, "events")
+        t = np.asarray(sol.event_time, dtype=np.float64).reshape(-1)
+        contact = np.asarray(sol.event_contact, dtype=np.int64).reshape(-1)
+        kind = np.asarray(sol.event_kind, dtype=np.int8).reshape(-1)
+        if not (len(t) == len(contact) == len(kind)):
+            raise StoreError(f"{self.path}: event arrays differ in length "
+                             f"({len(t)}, {len(contact)}, {len(kind)})")
+        event = _scale(events, "event", np.arange(len(t), dtype=np.int64),
+                       "event number, in time order")
+        _array(events, "time", t, [event], "time of the event")
+        c = _array(events, "contact", contact, [event],
+                   "contact j (0-based) joins balls j+1 and j+2 (ball numbers 1..N)")
+        c.attrs["base"] = np.int64(0)
+        k = _array(events, "kind", kind, [event], "what happened to the contact")
+        k.attrs["kinds"] = json.dumps({str(int(e)): e.name.lower() for e in EventKind})
+        k.attrs["flag_values"] = np.array([int(e) for e in EventKind], dtype=np.int8)
+        k.attrs["flag_meanings"] = " ".join(e.name.lower() for e in EventKind)
+
+        diag = _group(h5, "diagnostics")
+        for key, value in dataclasses.asdict(sol.diagnostics).items():
+            diag.attrs[key] = value
+
+    def abort(self) -> None:
+        """Close and delete the temporary file; nothing is written under ``path``."""
+        h5, self._h5 = self._h5, None
+        _discard(h5, self.temp_path)
+
+    def __enter__(self) -> "RunWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if not self._done:
+            self.abort()
+        return False
+
+
+def write_run(path, spec: RunSpec, solution: Solution, *, velocity_floor: float) -> None:
+    """Write a whole run file from a ``Solution`` that kept its snapshots.
+
+    Parameters
+    ----------
+    path : str or path
+    spec : RunSpec
+    solution : Solution
+        With ``positions`` and ``velocities`` of shape (T, N), or None when T = 0.
+    velocity_floor : float
+    """
+    times = np.asarray(solution.times, dtype=np.float64).reshape(-1)
+    if len(times) and (solution.positions is None or solution.velocities is None):
+        raise StoreError(f"{path}: the solution's snapshots were consumed by an observer; "
+                         "write them with RunWriter.snapshot")
+    with RunWriter(path, spec, velocity_floor=velocity_floor) as writer:
+        for i, t in enumerate(times):
+            writer.snapshot(i, float(t), solution.positions[i], solution.velocities[i])
+        writer.finish(solution)
+
+
+class Snapshots:
+    """Positions or velocities of a run file, shape (T, N), read only when indexed.
+
+    ``snaps[i]`` reads one snapshot, ``snaps[:, j]`` one ball's history, and
+    ``np.asarray(snaps)`` everything; each access opens the file for reading.
+    """
+
+    def __init__(self, path: Path, name: str, shape: tuple[int, int]):
+        self.path = path
+        self.name = name
+        self.shape = shape
+        self.dtype = np.dtype(np.float64)
+
+    ndim = 2
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def __getitem__(self, key):
+        key = key if isinstance(key, tuple) else (key,)
+        if len(key) > 2:
+            raise IndexError(f"too many indices for an array of shape {self.shape}")
+        simple = all(isinstance(k, (int, np.integer)) or
+                     (isinstance(k, slice) and (k.step or 1) > 0) for k in key)
+        if not simple or any(isinstance(k, (int, np.integer)) and not
+                             -size <= k < size for k, size in zip(key, self.shape)):
+            return np.asarray(self)[key]
+        key = tuple(int(k) % size if isinstance(k, (int, np.integer)) else k
+                    for k, size in zip(key, self.shape))
+        key = key + (slice(None),) * (2 - len(key)) + (0,)
+        with h5py.File(self.path, "r") as h5:
+            return h5[self.name][key]
+
+    def __array__(self, dtype=None, copy=None):
+        with h5py.File(self.path, "r") as h5:
+            data = h5[self.name][:, :, 0]
+        return data if dtype is None else data.astype(dtype)
+
+    def __repr__(self) -> str:
+        return f"Snapshots({str(self.path)!r}, {self.name!r}, shape={self.shape})"
+
+
+@dataclass(frozen=True, eq=False)
+class RunData:
+    """The contents of one run file.
+
+    Attributes
+    ----------
+    path : Path
+    format_version : int
+    created : str
+        ISO 8601 time the file was written.
+    creator_version : str
+        chainrun version that wrote it.
+    parameters : dict
+        ``n``, ``k``, ``alpha``, ``t_end`` (None when unbounded), ``rtol``,
+        ``max_events`` (None when unbounded), ``velocity_floor``, ``experiment``,
+        ``run_id``, ``config_hash``, ``config`` (the full config text),
+        ``config_resolved`` and ``overrides`` (parsed from JSON).
+    times : ndarray, shape (T,)
+    steps : ndarray of int64, shape (T,)
+        Snapshot indices.
+    positions, velocities : Snapshots, shape (T, N)
+        Read lazily; ``np.asarray`` loads all.
+    observables : dict of ndarray, shape (T,)
+        ``kinetic_energy``, ``potential_energy``, ``momentum`` at each snapshot.
+    final_position, final_velocity, separation_time, separation_velocity : ndarray, shape (N,)
+    event_time : ndarray, shape (E,)
+    event_contact : ndarray of int64, shape (E,)
+        Contact j (0-based) joins balls j+1 and j+2.
+    event_kind : ndarray of int8, shape (E,)
+        ``chainrun.solver.EventKind`` values.
+    outcome : str
+        ``chainrun.solver.Outcome`` value, e.g. ``"terminal"``.
+    message : str
+    end_time : float
+    terminal : bool
+    diagnostics : dict
+        The fields of ``chainrun.solver.Diagnostics``.
+    """
+
+    path: Path
+    format_version: int
+    created: str
+    creator_version: str
+    parameters: dict[str, Any]
+    times: np.ndarray
+    steps: np.ndarray
+    positions: Snapshots
+    velocities: Snapshots
+    observables: dict[str, np.ndarray]
+    final_position: np.ndarray
+    final_velocity: np.ndarray
+    separation_time: np.ndarray
+    separation_velocity: np.ndarray
+    event_time: np.ndarray
+    event_contact: np.ndarray
+    event_kind: np.ndarray
+    outcome: str
+    message: str
+    end_time: float
+    terminal: bool
+    diagnostics: dict[str, Any]
+
+    @property
+    def n(self) -> int:
+        return self.parameters["n"]
+
+    @property
+    def k(self) -> int:
+        return self.parameters["k"]
+
+    @property
+    def alpha(self) -> float:
+        return self.parameters["alpha"]
+
+
+def read_run(path) -> RunData:
+    """Read a run file (snapshots lazily), after checking its format and version.
+
+    Raises
+    ------
+    StoreError
+        If the file is missing, not a chainrun run file, of another format version,
+        or lacks an item of the schema.
+    """
+    name = os.fspath(path)
+    with _open_read(name) as h5:
+        version = _check_open(h5, name, RUN_FORMAT)
+        try:
+            return _read_run(h5, Path(name), version)
+        except KeyError as exc:
+            raise StoreError(f"{name}: damaged run file (missing {exc.args[0]})") from None
+
+
+def _get(h5: h5py.File, item: str):
+    if item not in h5:
+        raise KeyError(item)
+    return h5[item]
+
+
+def _attr(obj, key: str):
+    if key not in obj.attrs:
+        raise KeyError(f"{obj.name}@{key}")
+    return obj.attrs[key]
+
+
+def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
+    p = _get(h5, "parameters")
+    params = {key: _py(value) for key, value in p.attrs.items()}
+    for key in ("n", "k", "alpha"):
+        _attr(p, key)
+    if isinstance(params.get("t_end"), float) and np.isnan(params["t_end"]):
+        params["t_end"] = None
+    if params.get("max_events") == -1:
+        params["max_events"] = None
+    for key in ("config_resolved", "overrides"):
+        if key in params:
+            params[key] = json.loads(params[key])
+
+    pos = _get(h5, "particles/chain/position")
+    times = _get(pos, "time")[()]
+    steps = _get(pos, "step")[()]
+    shape = _get(pos, "value").shape[:2]
+    observables = {name: _get(h5, f"observables/{name}/value")[()] for name in OBSERVABLES}
+    res = _get(h5, "results")
+    ev = _get(h5, "events")
+    diag = _get(h5, "diagnostics")
+    return RunData(
+        path=path,
+        format_version=version,
+        created=_as_str(h5.attrs.get("created", "")),
+        creator_version=_as_str(_attr(_get(h5, "h5md/creator"), "version")),
+        parameters=params,
+        times=times,
+        steps=steps,
+        positions=Snapshots(path, "particles/chain/position/value", shape),
+        velocities=Snapshots(path, "particles/chain/velocity/value", shape),
+        observables=observables,
+        final_position=_get(res, "final_position")[()],
+        final_velocity=_get(res, "final_velocity")[()],
+        separation_time=_get(res, "separation_time")[()],
+        separation_velocity=_get(res, "separation_velocity")[()],
+        event_time=_get(ev, "time")[()],
+        event_contact=_get(ev, "contact")[()],
+        event_kind=_get(ev, "kind")[()],
+        outcome=_as_str(_attr(res, "outcome")),
+        message=_as_str(_attr(res, "message")),
+        end_time=float(_attr(res, "end_time")),
+        terminal=bool(_attr(res, "terminal")),
+        diagnostics={key: _py(value) for key, value in diag.attrs.items()},
+    )
+
+
+# --------------------------------------------------------------------- index files
+
+
+def _column(values: list, kind: str, name: str, path) -> np.ndarray:
+    if kind == "str":
+        return np.array([str(v) for v in values], dtype=h5py.string_dtype())
+    if kind == "bool":
+        return np.array([bool(v) for v in values], dtype=np.bool_)
+    if kind == "int":
+        try:
+            return np.array([int(v) for v in values], dtype=np.int64)
+        except (TypeError, ValueError):
+            raise StoreError(f"{path}: index column {name!r} needs integers") from None
+    return np.array([np.nan if v is None else float(v) for v in values], dtype=np.float64)
+
+
+def _kind_of(values: Iterable) -> str:
+    kinds = set()
+    for v in values:
+        if isinstance(v, (bool, np.bool_)):
+            kinds.add("bool")
+        elif isinstance(v, (int, np.integer)):
+            kinds.add("int")
+        elif isinstance(v, (float, np.floating)) or v is None:
+            kinds.add("float")
+        else:
+            kinds.add("str")
+    if kinds <= {"int", "float"} and "float" in kinds:
+        return "float"
+    return kinds.pop() if len(kinds) == 1 else "str"
+
+
+def write_index(path, experiment: str, entries: list[dict]) -> None:
+    """Write an experiment's index file atomically: a table of runs and links to them.
+
+    Parameters
+    ----------
+    path : str or path
+    experiment : str
+    entries : list of dict
+        One per run, with at least the keys of ``INDEX_COLUMNS`` (``run_id``,
+        ``file`` -- the run file's name relative to the index file's folder --, ``n``,
+        ``k``, ``alpha``, ``outcome``, ``terminal``, ``end_time``, ``events``,
+        ``wall_time``, ``config_hash``). Further keys present in every entry with
+        scalar values become further columns.
+    """
+    path = Path(path)
+    entries = list(entries)
+    missing = sorted({c for e in entries for c in INDEX_COLUMNS if c not in e})
+    if missing:
+        raise StoreError(f"{path}: index entries lack {', '.join(missing)}")
+    ids = [str(e["run_id"]) for e in entries]
+    for run_id in ids:
+        if not run_id or "/" in run_id or run_id in (".", ".."):
+            raise StoreError(f"{path}: run_id {run_id!r} cannot name an HDF5 link")
+    if len(set(ids)) != len(ids):
+        raise StoreError(f"{path}: run_id values are not unique")
+    kinds = dict(INDEX_COLUMNS)
+    for key in entries[0] if entries else ():
+        if key not in kinds and all(key in e for e in entries):
+            kinds[key] = _kind_of(e[key] for e in entries)
+
+    temp = _temp_name(path)
+    h5 = _create(path, temp, "index file")
+    try:
+        _stamp(h5, INDEX_FORMAT)
+        h5.attrs["experiment"] = str(experiment)
+        h5.attrs["creator_name"] = "chainrun"
+        h5.attrs["creator_version"] = chainrun.__version__
+        table = _group(h5, "table")
+        run = _scale(table, "run", np.arange(len(entries), dtype=np.int64), "row number")
+        for name, kind in kinds.items():
+            data = _column([e[name] for e in entries], kind, name, path)
+            ds = table.create_dataset(name, data=data)
+            ds.dims[0].attach_scale(run)
+        table.attrs["columns"] = json.dumps(list(kinds))
+        runs = _group(h5, "runs")
+        for entry in entries:
+            runs[str(entry["run_id"])] = h5py.ExternalLink(os.fspath(entry["file"]), "/")
+        _commit(h5, temp, path)
+    except BaseException:
+        _discard(h5, temp)
+        raise
+
+
+def read_index(path) -> list[dict]:
+    """Read the table of an index file: one dict per run, in the order written."""
+    name = os.fspath(path)
+    with _open_read(name) as h5:
+        _check_open(h5, name, INDEX_FORMAT)
+        try:
+            table = _get(h5, "table")
+            columns = json.loads(_as_str(_attr(table, "columns")))
+            data = {c: _get(table, c)[()] for c in columns}
+        except KeyError as exc:
+            raise StoreError(f"{name}: damaged index file (missing {exc.args[0]})") from None
+    rows = len(data[columns[0]]) if columns else 0
+    return [{c: _py(data[c][i]) for c in columns} for i in range(rows)]
