@@ -817,24 +817,51 @@ def _release_quiet(S):
 
 
 @nb.njit(cache=True)
-def _engage_overlaps(S):
-    """After a change of structure: engage boundary contacts already pressed past their level."""
+def _due(S, j):
+    """The event contact j is due at this instant, if its state disagrees with its motion.
+
+    Several contacts can reach their levels at the same instant (a mirror-symmetric
+    line opens two at once); the step lands on one, and the others sit within rounding
+    of their level, possibly just past it, where no crossing will ever be seen.
+    """
     t = S.fs[F_T]
+    xl = S.bx[j] + S.bv[j] * (t - S.bt[j])
+    xr = S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1])
+    c = xl - xr
+    w = S.bv[j] - S.bv[j + 1]
+    r = _rounding(abs(xl) + abs(xr))
+    st = S.cst[j]
+    if st == ACTIVE or st == FRESH:
+        lev = 0.0 if st == ACTIVE else -r
+        if (c <= lev + r and w < 0.0) or c < lev - r:
+            return EV_OPEN
+    elif st == DORMANT:
+        if c >= LEVEL_DORMANT:
+            return EV_ENGAGE
+        if c <= -S.fs[F_EPSREL]:
+            return EV_RELEASE
+    else:
+        if c >= -r and w >= S.fs[F_FLOOR]:
+            return EV_CLOSE
+        if c >= S.lvl[j]:
+            return EV_ENGAGE
+    return 0
+
+
+@nb.njit(cache=True)
+def _settle(S):
+    """After a change of structure, apply every event due at this instant (positions synced)."""
     ncont = S.cst.shape[0]
     changed = True
     while changed:
         changed = False
         for c in range(S.ints[I_NCL]):
-            for j in (S.clo[c] - 1, S.chi[c]):
-                if j < 0 or j >= ncont:
-                    continue
-                st = S.cst[j]
-                if st != OPEN and st != DORMANT:
-                    continue
-                cj = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
-                lev = LEVEL_DORMANT if st == DORMANT else S.lvl[j]
-                if cj >= lev:
-                    if not _apply_event(S, j, EV_ENGAGE):
+            j0 = max(S.clo[c] - 1, 0)
+            j1 = min(S.chi[c], ncont - 1)
+            for j in range(j0, j1 + 1):
+                kind = _due(S, j)
+                if kind != 0:
+                    if not _apply_event(S, j, kind):
                         return False
                     changed = True
                     break
@@ -856,7 +883,7 @@ def _post_step(S):
         if not _release_quiet(S):
             return False
     if S.ints[I_DIRTY] == 1:
-        return _engage_overlaps(S)
+        return _settle(S)
     return True
 
 
