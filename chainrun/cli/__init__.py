@@ -1,0 +1,33 @@
+"""The ``chainrun`` command: thin click commands over library functions of the same names.
+
+One module per command; library errors (``ChainrunError``) become one-line messages and
+a non-zero exit status. Nothing here computes or writes anything itself.
+"""
+
+from __future__ import annotations
+
+import click
+
+from chainrun import __version__
+from chainrun.cli.simulate import simulate
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="chainrun")
+def main():
+    """Exact, event-driven experiments on a line of touching balls struck at one end.
+
+    N equal balls touch in a line; the first K move at velocity 1 and hit the rest.
+    Contacts push with force (compression)^alpha and never pull (alpha = 1 linear,
+    1.5 Hertz). chainrun locates every contact opening and closing, integrates only
+    the balls that touch, and runs each line to its terminal state.
+
+    \b
+    Examples:
+      chainrun simulate configs/table1.toml          # the paper's Table 1
+      chainrun simulate my.yaml -o results/mine --jobs 2
+      chainrun simulate --help                       # the experiment file format
+    """
+
+
+main.add_command(simulate)

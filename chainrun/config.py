@@ -1,0 +1,735 @@
+"""Experiment files: the one schema for YAML and TOML, validation, and sweep expansion.
+
+This module owns turning config text into frozen, validated objects. Nothing else in
+chainrun parses experiment files.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import itertools
+import json
+import math
+import os
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Annotated, Any, NamedTuple
+
+import numpy as np
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from chainrun.errors import ConfigError
+from chainrun.solver import DEFAULT_RTOL
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One fully specified run of an experiment (one point of a sweep).
+
+    Attributes
+    ----------
+    experiment : str
+        The experiment's ``name``.
+    run_id : str
+        File-name-safe id, unique within the experiment: ``"run"`` without a sweep,
+        else the swept values, e.g. ``"k=2"`` or ``"n=100_k=3"``.
+    n, k : int
+    alpha : float
+    times : ndarray, shape (T,)
+        Snapshot times, non-negative and non-decreasing.
+    t_end : float or None
+    rtol : float
+    max_events : int or None
+    overrides : dict
+        The swept keys and their values for this run, e.g. ``{"chain.k": 2}``.
+    config : dict
+        The resolved configuration of this single run (no ``sweep`` table), as plain
+        JSON-compatible data.
+    config_hash : str
+        sha256 of the canonical JSON of ``config``: two runs with the same hash are
+        the same computation.
+    source_text : str
+        The full text of the experiment file the run came from.
+    """
+
+    experiment: str
+    run_id: str
+    n: int
+    k: int
+    alpha: float
+    times: np.ndarray
+    t_end: float | None
+    rtol: float
+    max_events: int | None
+    overrides: dict[str, Any] = field(default_factory=dict)
+    config: dict[str, Any] = field(default_factory=dict)
+    config_hash: str = ""
+    source_text: str = ""
+
+
+# ---------------------------------------------------------------------------------------
+# Everything below is the experiment-file schema and its loader.
+# ---------------------------------------------------------------------------------------
+
+__all__ = [
+    "Chain",
+    "Experiment",
+    "Output",
+    "RunSpec",
+    "SWEEPABLE_KEYS",
+    "SolverSettings",
+    "load_experiment",
+    "parse_experiment",
+]
+
+#: File extensions and the format each one is read as.
+FORMATS = {".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
+
+#: Keys a ``[sweep]`` table may vary, and the type of their values.
+SWEEPABLE_KEYS: dict[str, type] = {
+    "chain.n": int,
+    "chain.k": int,
+    "chain.alpha": float,
+    "solver.rtol": float,
+    "solver.t_end": float,
+    "solver.max_events": int,
+}
+
+#: Most snapshot times a ``{start, stop, step}`` range may expand to.
+MAX_RANGE_TIMES = 10_000_000
+
+_NAME_RE = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,99}")
+_ERROR_TYPE = "chainrun"  # pydantic error type of the problems raised in this module
+
+
+# --- problems: one line each, naming a dotted key ----------------------------------------
+
+
+class _Issue(NamedTuple):
+    """One problem found inside a validator, relative to the field it validates.
+
+    ``sub`` extends the field's location (e.g. ``("step",)`` for ``output.times.step``);
+    ``involves`` names sibling keys the problem also depends on (e.g. ``("n",)`` for
+    ``chain.k <= chain.n``), which decides whether a sweep combination caused it.
+    """
+
+    reason: str
+    sub: tuple[str, ...] = ()
+    involves: tuple[str, ...] = ()
+
+
+class _Problem(NamedTuple):
+    """A problem with its full dotted key, ready to print as ``key: reason``."""
+
+    key: str
+    reason: str
+    involves: frozenset[str] = frozenset()
+
+    def line(self) -> str:
+        return f"{self.key}: {self.reason}" if self.key else self.reason
+
+
+def _fail(issues: list[_Issue]) -> PydanticCustomError:
+    """The pydantic error carrying ``issues``; ``_translate`` unpacks it again."""
+    return PydanticCustomError(
+        _ERROR_TYPE, "{reason}", {"reason": "; ".join(i.reason for i in issues), "issues": issues}
+    )
+
+
+def _show(value: Any) -> str:
+    """A short one-line rendering of a user's value for a message."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _bound(value: Any) -> str:
+    if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
+        return str(int(value))
+    return repr(value)
+
+
+def _suggest(word: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(word, choices, n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+# --- scalar checks shared by the models and the sweep table ------------------------------
+
+
+def _check_int(value: Any) -> int:
+    """``value`` if it is a true integer (not a bool, not 2.0 or "3"), else an error."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value
+    raise _fail([_Issue(f"expected an integer, got {_show(value)}")])
+
+
+def _check_float(value: Any) -> float:
+    """``value`` as a float if it is a finite int or float (not a bool), else an error."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        x = float(value)
+        if math.isfinite(x):
+            return x
+        raise _fail([_Issue(f"must be finite, got {_show(value)}")])
+    hint = ""
+    if isinstance(value, str):
+        try:
+            float(value)
+            hint = " (text, not a number; YAML reads 1e-12 as text: write 1.0e-12)"
+        except ValueError:
+            pass
+    raise _fail([_Issue(f"expected a number, got {_show(value)}{hint}")])
+
+
+def _check_str(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    raise _fail([_Issue(f"expected a string, got {_show(value)}")])
+
+
+def _none_or(check):
+    return lambda value: None if value is None else check(value)
+
+
+_Int = Annotated[int, BeforeValidator(_check_int)]
+_Float = Annotated[float, BeforeValidator(_check_float)]
+_OptInt = Annotated[int | None, BeforeValidator(_none_or(_check_int))]
+_OptFloat = Annotated[float | None, BeforeValidator(_none_or(_check_float))]
+
+_SCALAR_CHECKS = {int: _check_int, float: _check_float}
+
+
+# --- the models ---------------------------------------------------------------------------
+
+
+class Chain(BaseModel):
+    """The line of balls: ``n`` balls, the first ``k`` moving at velocity 1, and the
+    contact exponent ``alpha`` (1 linear, 1.5 Hertz)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    n: _Int = Field(ge=1)
+    k: _Int = Field(ge=1)
+    alpha: _Float = Field(ge=1)
+
+    @field_validator("k")
+    @classmethod
+    def _k_at_most_n(cls, k: int, info: ValidationInfo) -> int:
+        n = info.data.get("n")  # absent when n itself is invalid
+        if n is not None and k > n:
+            raise _fail([_Issue(f"must be <= chain.n ({n}), got {k}", involves=("n",))])
+        return k
+
+
+def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Issue]]:
+    """Snapshot times ``start, start + step, ...`` up to ``stop`` inclusive (to rounding)."""
+    issues: list[_Issue] = []
+    fields = ["start", "stop", "step"]
+    for key in table:
+        if key not in fields:
+            issues.append(_Issue(f"unknown key{_suggest(str(key), fields)}", (str(key),)))
+    got: dict[str, float] = {}
+    for key in fields:
+        if key not in table:
+            issues.append(_Issue("required", (key,)))
+            continue
+        try:
+            got[key] = _check_float(table[key])
+        except PydanticCustomError as exc:
+            issues.extend(i._replace(sub=(key,)) for i in exc.context["issues"])
+    if "start" in got and got["start"] < 0:
+        issues.append(_Issue(f"must be non-negative, got {got['start']!r}", ("start",)))
+    if "step" in got and got["step"] <= 0:
+        issues.append(_Issue(f"must be > 0, got {got['step']!r}", ("step",)))
+    if "start" in got and "stop" in got and got["stop"] < got["start"]:
+        issues.append(
+            _Issue(f"must be >= output.times.start ({got['start']!r}), got {got['stop']!r}", ("stop",))
+        )
+    if issues:
+        return (), issues
+    start, stop, step = got["start"], got["stop"], got["step"]
+    m = (stop - start) / step
+    steps = round(m) if abs(m - round(m)) <= 1e-9 * max(1.0, m) else math.floor(m)
+    if steps + 1 > MAX_RANGE_TIMES:
+        return (), [_Issue(f"a range of {steps + 1} times is too many (at most {MAX_RANGE_TIMES})")]
+    times = start + step * np.arange(steps + 1, dtype=np.float64)
+    times[-1] = min(times[-1], stop)  # stop inclusive: do not let rounding step past it
+    return tuple(float(t) for t in times), []
+
+
+class Output(BaseModel):
+    """What to record: snapshot times, a list or a ``{start, stop, step}`` range."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    times: tuple[float, ...] = ()
+
+    @field_validator("times", mode="before")
+    @classmethod
+    def _times(cls, value: Any) -> tuple[float, ...]:
+        if isinstance(value, Mapping):
+            times, issues = _expand_range(value)
+            if issues:
+                raise _fail(issues)
+            return times
+        if not isinstance(value, (list, tuple)):
+            raise _fail(
+                [_Issue(f"expected a list of times or a table {{start, stop, step}}, got {_show(value)}")]
+            )
+        issues: list[_Issue] = []
+        times: list[float] = []
+        previous: float | None = None
+        for position, item in enumerate(value):
+            try:
+                t = _check_float(item)
+            except PydanticCustomError as exc:
+                issues.extend(
+                    i._replace(reason=f"{i.reason} at position {position}") for i in exc.context["issues"]
+                )
+                continue
+            if t < 0:
+                issues.append(_Issue(f"must be non-negative, got {t!r} at position {position}"))
+            if previous is not None and t < previous:
+                issues.append(
+                    _Issue(f"must be non-decreasing, got {t!r} after {previous!r} (position {position})")
+                )
+            previous = t
+            times.append(t)
+        if issues:
+            raise _fail(issues)
+        return tuple(times)
+
+
+class SolverSettings(BaseModel):
+    """How to run: an optional stop time, step accuracy and event limit.
+
+    ``t_end = None`` runs to the terminal state (no contact can ever close again).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    t_end: _OptFloat = Field(None, gt=0)
+    rtol: _Float = Field(DEFAULT_RTOL, ge=1e-15, le=1e-3)
+    max_events: _OptInt = Field(None, gt=0)
+
+
+def _flatten_sweep(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``."""
+    items: list[tuple[str, Any]] = []
+    for key, value in table.items():
+        dotted = f"{prefix}{key}"
+        if isinstance(value, Mapping) and dotted not in SWEEPABLE_KEYS:
+            items.extend(_flatten_sweep(value, dotted + "."))
+        else:
+            items.append((dotted, value))
+    return items
+
+
+def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list[_Issue]]:
+    """The valid entries of a sweep table, every sweepable key it names, and its issues."""
+    if value is None:
+        return {}, set(), []
+    if not isinstance(value, Mapping):
+        return {}, set(), [_Issue(f"expected a table, got {_show(value)}")]
+    valid: dict[str, tuple[Any, ...]] = {}
+    named: set[str] = set()
+    issues: list[_Issue] = []
+    for key, values in _flatten_sweep(value):
+        if key not in SWEEPABLE_KEYS:
+            issues.append(_Issue(f"unknown key '{key}'{_suggest(key, list(SWEEPABLE_KEYS))}"))
+            continue
+        named.add(key)
+        sub = (key,)
+        if not isinstance(values, (list, tuple)):
+            issues.append(_Issue(f"expected a list of values, got {_show(values)}", sub))
+            continue
+        if not values:
+            issues.append(_Issue("must list at least one value", sub))
+            continue
+        check = _SCALAR_CHECKS[SWEEPABLE_KEYS[key]]
+        clean: list[Any] = []
+        ok = True
+        for position, item in enumerate(values):
+            try:
+                x = check(item)
+            except PydanticCustomError as exc:
+                ok = False
+                issues.extend(
+                    i._replace(reason=f"{i.reason} at position {position}", sub=sub)
+                    for i in exc.context["issues"]
+                )
+                continue
+            if x in clean:
+                ok = False
+                issues.append(_Issue(f"duplicate value {x!r} at position {position}", sub))
+            clean.append(x)
+        if ok:
+            valid[key] = tuple(clean)
+    return valid, named, issues
+
+
+def _label(overrides: Mapping[str, Any], sep: str = ", ") -> str:
+    """``"n=100, k=3"``: the last part of each swept key with its value."""
+    return sep.join(f"{key.split('.')[-1]}={value}" for key, value in overrides.items())
+
+
+def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``data["chain"]["k"]`` for ``"chain.k"``, creating a missing table."""
+    table, key = dotted.split(".")
+    if data.get(table) is None:
+        data[table] = {}
+    if isinstance(data[table], Mapping):
+        data[table] = {**data[table], key: value}
+
+
+class Experiment(BaseModel):
+    """One experiment file: a chain, output times, solver settings and an optional sweep.
+
+    With a sweep, a swept key may be left out of its own table; the experiment then
+    holds the sweep's first value there (``runs()`` gives every combination). Two
+    experiments are equal when their fields are, whatever text they came from.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str
+    description: str = ""
+    chain: Chain
+    output: Output = Output()
+    solver: SolverSettings = SolverSettings()
+    sweep: dict[str, tuple[int | float, ...]] = Field(default_factory=dict)
+
+    _source_text: str = PrivateAttr(default="")
+    _source: str = PrivateAttr(default="")  # where the text came from, for errors
+
+    @field_validator("name", mode="before")
+    @classmethod
+    def _name(cls, value: Any) -> str:
+        value = _check_str(value)
+        if not _NAME_RE.fullmatch(value):
+            raise _fail(
+                [
+                    _Issue(
+                        "must be a folder name of 1-100 letters, digits, '.', '_' or '-', "
+                        f"not starting with '.', got {_show(value)}"
+                    )
+                ]
+            )
+        return value
+
+    @field_validator("description", mode="before")
+    @classmethod
+    def _description(cls, value: Any) -> str:
+        return "" if value is None else _check_str(value)
+
+    @field_validator("output", "solver", mode="before")
+    @classmethod
+    def _empty_table(cls, value: Any) -> Any:
+        return {} if value is None else value  # YAML ``output:`` with nothing under it
+
+    @field_validator("sweep", mode="before")
+    @classmethod
+    def _sweep(cls, value: Any) -> dict[str, tuple[Any, ...]]:
+        valid, _, issues = _check_sweep(value)
+        if issues:
+            raise _fail(issues)
+        return valid
+
+    @property
+    def source_text(self) -> str:
+        """The full text of the file this experiment was read from ("" if built in code)."""
+        return self._source_text
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Experiment):
+            return NotImplemented
+        return self.__dict__ == other.__dict__
+
+    def __hash__(self) -> int:
+        sweep = tuple(self.sweep.items())
+        return hash((self.name, self.description, self.chain, self.output, self.solver, sweep))
+
+    def _base_data(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "description": self.description,
+            "chain": self.chain.model_dump(),
+            "output": {"times": list(self.output.times)},
+            "solver": self.solver.model_dump(),
+        }
+
+    def runs(self) -> list[RunSpec]:
+        """Every run of the experiment: the cartesian product of the sweep.
+
+        Keys vary in the order they are written, the last fastest; values in the order
+        given. Without a sweep there is one run, ``run_id == "run"``.
+
+        Returns
+        -------
+        list of RunSpec
+
+        Raises
+        ------
+        ConfigError
+            If a combination is invalid (only possible for an experiment built in code;
+            ``load_experiment`` checks every combination).
+        """
+        keys = list(self.sweep)
+        specs: list[RunSpec] = []
+        for combo in itertools.product(*(self.sweep[k] for k in keys)):
+            overrides = dict(zip(keys, combo))
+            data = self._base_data()
+            for key, value in overrides.items():
+                _set_key(data, key, value)
+            problems: list[_Problem] = []
+            try:
+                chain = Chain.model_validate(data["chain"])
+            except ValidationError as exc:
+                problems += _translate(exc, ("chain",))
+            try:
+                solver = SolverSettings.model_validate(data["solver"])
+            except ValidationError as exc:
+                problems += _translate(exc, ("solver",))
+            if problems:
+                label = _label(overrides)
+                lines = [f"sweep ({label}): {p.line()}" for p in problems]
+                raise ConfigError(self._source or self.name, lines)
+            config = {**data, "chain": chain.model_dump(), "solver": solver.model_dump()}
+            canonical = json.dumps(config, sort_keys=True, separators=(",", ":"))
+            specs.append(
+                RunSpec(
+                    experiment=self.name,
+                    run_id=_label(overrides, "_") or "run",
+                    n=chain.n,
+                    k=chain.k,
+                    alpha=chain.alpha,
+                    times=np.array(self.output.times, dtype=np.float64),
+                    t_end=solver.t_end,
+                    rtol=solver.rtol,
+                    max_events=solver.max_events,
+                    overrides=overrides,
+                    config=config,
+                    config_hash=hashlib.sha256(canonical.encode()).hexdigest(),
+                    source_text=self.source_text,
+                )
+            )
+        return specs
+
+
+_MODEL_AT: dict[tuple[str, ...], type[BaseModel]] = {
+    (): Experiment,
+    ("chain",): Chain,
+    ("output",): Output,
+    ("solver",): SolverSettings,
+}
+
+
+# --- pydantic errors -> one-line problems -------------------------------------------------
+
+
+def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Problem]:
+    """Each pydantic error as a ``key: reason`` problem (never pydantic's own text)."""
+    problems: list[_Problem] = []
+    for error in exc.errors(include_url=False):
+        loc = prefix + tuple(str(part) for part in error["loc"])
+        kind, ctx, value = error["type"], error.get("ctx") or {}, error.get("input")
+        if kind == _ERROR_TYPE:
+            for issue in ctx["issues"]:
+                parent = loc + issue.sub
+                problems.append(
+                    _Problem(
+                        ".".join(parent),
+                        issue.reason,
+                        frozenset(".".join(loc[:-1] + (k,)) for k in issue.involves),
+                    )
+                )
+            continue
+        key = ".".join(loc)
+        if kind == "missing":
+            reason = "required"
+        elif kind == "extra_forbidden":
+            model = _MODEL_AT.get(loc[:-1])
+            choices = list(model.model_fields) if model else []
+            reason = f"unknown key{_suggest(loc[-1], choices)}"
+        elif kind == "invalid_key":
+            key = ".".join(loc[:-1]) or "top level"
+            reason = f"unknown key {_show(error['loc'][-1])} (keys must be text)"
+        elif kind in ("model_type", "dict_type", "model_attributes_type"):
+            reason = f"expected a table, got {_show(value)}"
+        elif kind == "string_type":
+            reason = f"expected a string, got {_show(value)}"
+        elif kind in ("greater_than_equal", "greater_than", "less_than_equal", "less_than"):
+            op, bound = {
+                "greater_than_equal": (">=", "ge"),
+                "greater_than": (">", "gt"),
+                "less_than_equal": ("<=", "le"),
+                "less_than": ("<", "lt"),
+            }[kind]
+            reason = f"must be {op} {_bound(ctx[bound])}, got {_show(value)}"
+        else:  # not expected from this schema; pydantic's msg is one line
+            reason = f"{error['msg']}, got {_show(value)}"
+        problems.append(_Problem(key, reason))
+    return problems
+
+
+def _validate(data: Any, source: str) -> Experiment:
+    """The experiment in ``data`` (parsed file contents), every problem reported at once.
+
+    Each sweep combination is validated on its own; problems a combination causes are
+    named by it, e.g. ``sweep (n=3, k=4): chain.k: must be <= chain.n (3), got 4``.
+    """
+    if not isinstance(data, Mapping):
+        got = "an empty file" if data is None else f"{type(data).__name__} {_show(data)}"
+        raise ConfigError(source, [f"top level: expected a table of keys, got {got}"])
+    valid, named, sweep_issues = _check_sweep(data.get("sweep"))
+    base = {key: value for key, value in data.items() if key != "sweep"}
+    keys = list(valid)
+    combos = [dict(zip(keys, c)) for c in itertools.product(*(valid[k] for k in keys))]
+
+    base_lines: list[str] = []
+    combo_lines: list[str] = []
+    first: dict[str, Any] | None = None
+    for overrides in combos:
+        merged = dict(base)
+        for key, value in overrides.items():
+            _set_key(merged, key, value)
+        problems: list[_Problem] = []
+        if first is None:  # the whole file once ...
+            first = merged
+            try:
+                Experiment.model_validate(merged)
+            except ValidationError as exc:
+                problems = _translate(exc)
+        else:  # ... then only the tables the sweep changes
+            for table in dict.fromkeys(key.split(".")[0] for key in overrides):
+                model = _MODEL_AT[(table,)]
+                if isinstance(merged[table], Mapping):
+                    try:
+                        model.model_validate(merged[table])
+                    except ValidationError as exc:
+                        problems += _translate(exc, (table,))
+        if not problems:
+            continue
+        label = _label(overrides)
+        for problem in problems:
+            touched = {problem.key} | problem.involves
+            if touched & (named - set(valid)):
+                continue  # a key whose sweep entry is itself broken: reported there
+            if touched & named:
+                line = f"sweep ({label}): {problem.line()}"
+                target = combo_lines
+            else:
+                line, target = problem.line(), base_lines
+            if line not in target:
+                target.append(line)
+    lines = list(base_lines)
+    lines += [
+        (f"sweep.{i.sub[0]}: {i.reason}" if i.sub else f"sweep: {i.reason}") for i in sweep_issues
+    ]
+    lines += combo_lines
+    if lines:
+        raise ConfigError(source, lines)
+    assert first is not None
+    return Experiment.model_validate({**first, "sweep": data.get("sweep")})
+
+
+# --- reading files ------------------------------------------------------------------------
+
+
+def _syntax_line(exc: Exception, text: str, fmt: str) -> str:
+    """A parser error as ``line L: message``."""
+    if fmt == "toml":
+        message = str(exc)
+        found = re.search(r"\s*\(at line (\d+), column (\d+)\)", message)
+        if found:
+            rest = message[: found.start()] + message[found.end() :]
+            return f"line {found.group(1)}: {rest.strip()} (column {found.group(2)})"
+        found = re.search(r"\s*\(at end of document\)", message)
+        if found:
+            rest = message[: found.start()] + message[found.end() :]
+            return f"line {max(1, len(text.splitlines()))}: {rest.strip()} (at end of document)"
+        return " ".join(message.split())
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or " ".join(str(exc).split())
+    context = getattr(exc, "context", None)
+    reason = f"{problem} ({context})" if context else problem
+    if mark is None:
+        return reason
+    return f"line {mark.line + 1}: {reason} (column {mark.column + 1})"
+
+
+def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experiment:
+    """The experiment described by ``text``.
+
+    Parameters
+    ----------
+    text : str
+        The whole experiment file.
+    fmt : {"toml", "yaml"}
+        Its format (``"yml"`` is taken as ``"yaml"``).
+    source : str
+        Where the text came from, for error messages.
+
+    Returns
+    -------
+    Experiment
+        Validated, with ``source_text == text``.
+
+    Raises
+    ------
+    ConfigError
+        With every problem found, one line each.
+    """
+    fmt = {"yml": "yaml"}.get(fmt, fmt)
+    if fmt not in ("toml", "yaml"):
+        raise ConfigError(source, [f"unknown format {fmt!r} (expected 'toml' or 'yaml')"])
+    try:
+        data = tomllib.loads(text) if fmt == "toml" else yaml.safe_load(text)
+    except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
+        raise ConfigError(source, [_syntax_line(exc, text, fmt)]) from None
+    experiment = _validate(data, source)
+    experiment._source_text = text  # private attributes are not frozen
+    experiment._source = source
+    return experiment
+
+
+def load_experiment(path: str | os.PathLike[str]) -> Experiment:
+    """Read and validate the experiment file at ``path`` (``.toml``, ``.yaml`` or ``.yml``).
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing, unreadable, of an unknown type, or invalid; the error
+        lists every problem found.
+    """
+    source = os.fspath(path)
+    suffix = os.path.splitext(source)[1].lower()
+    if suffix not in FORMATS:
+        raise ConfigError(
+            source, [f"unknown file type {suffix or '(none)'!r} (expected .toml, .yaml or .yml)"]
+        )
+    try:
+        with open(source, encoding="utf-8") as handle:
+            text = handle.read()
+    except FileNotFoundError:
+        raise ConfigError(source, ["no such file"]) from None
+    except IsADirectoryError:
+        raise ConfigError(source, ["is a folder, not a file"]) from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(source, [f"not UTF-8 text (byte {exc.start})"]) from None
+    except OSError as exc:
+        raise ConfigError(source, [f"cannot read: {exc.strerror}"]) from None
+    return parse_experiment(text, FORMATS[suffix], source)
