@@ -285,3 +285,28 @@ def test_mirror_symmetry(n, alpha):
         b = run(n, n - k, alpha).final_velocity
         np.testing.assert_allclose(b, 1.0 - a[::-1], rtol=0, atol=TOL["reference"],
                                    err_msg=f"N={n} K={k}<->{n - k} alpha={alpha}")
+
+
+# ---- 8. Accuracy of the default tolerance, and the tightest tolerance -----------------
+@pytest.mark.parametrize("n, k, alpha", [(200, 1, 1.0), (300, 1, 1.5), (100, 3, 1.5), (40, 5, 2.3)])
+def test_default_accuracy_against_converged(n, k, alpha):
+    """Default rtol gives final velocities within 1e-9 of the converged answer.
+
+    The converged answer is the same line at rtol = 1e-15, whose own error is three
+    orders of magnitude smaller (the error falls linearly with rtol); N = 100, K = 3
+    includes the late catch-up collisions up to t ~ 2e6.
+    """
+    converged = simulate(n, k, alpha, rtol=1e-15)
+    default = run(n, k, alpha)
+    assert_terminal(converged)
+    assert_terminal(default)
+    np.testing.assert_allclose(default.final_velocity, converged.final_velocity,
+                               rtol=0, atol=TOL["reference"])
+
+
+def test_tightest_tolerance_runs_to_the_end():
+    """At rtol = 1e-15 the floor's compression is below the rounding of the positions;
+    contacts opened within rounding must not flip back and forth."""
+    sol = simulate(200, 1, 1.0, rtol=1e-15)
+    assert_terminal(sol)
+    assert sol.diagnostics.momentum_error < 1e-12

@@ -113,7 +113,7 @@ def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
         ox=np.zeros(n), ov=np.zeros(n),
-        freed=np.zeros(n, np.int64), jbuf=np.zeros(n, np.int64),
+        freed=np.zeros(2 * n + 8, np.int64), jbuf=np.zeros(n, np.int64),
         fs=fs, ints=ints,
     )
 
@@ -173,7 +173,9 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         elif status == K.ST_GROW:
             need = int(S.ints[K.I_NEED])
             if need <= 0:
-                raise RuntimeError("solver state is inconsistent: cluster table overflow")
+                raise RuntimeError(
+                    f"internal error: contact states did not settle at t = {S.fs[K.F_T]!r} "
+                    f"({_window_text(S)}); please report this with the config")
             S = _grow(S, need)
         elif status == K.ST_YIELD:
             if on_progress is not None:

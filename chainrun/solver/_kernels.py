@@ -80,6 +80,9 @@ EV_ENGAGE = 2
 #: compression at which a dormant contact engages: its force c^alpha <= 1e-24 is far
 #: below rounding of order-1 velocities, and it keeps subnormals out of the front.
 LEVEL_DORMANT = 1e-24
+#: a dormant contact compressed less than this at the end of a step engages there
+#: without being located (the force it missed is below LEVEL_LOCATE^alpha * h)
+LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
 YIELD_STEPS = 20000
@@ -91,7 +94,7 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NINT = range(20)
+    I_REDO, I_NDENSE, I_NINT = range(22)
 
 State = namedtuple(
     "State",
@@ -153,63 +156,68 @@ def _rhs(S, Xs, out):
 # =========================================================================================
 @nb.njit(cache=True)
 def _step(S, h):
-    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm."""
+    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm.
+
+    Stage sums are accumulated row by row over contiguous compact arrays; rows 5 and 6
+    of FV serve as scratch (any step invalidates the dense output anyway).
+    """
     m = S.ints[I_M]
     KX, KV, X0, V0, A0, X, V = S.KX, S.KV, S.X0, S.V0, S.A0, S.X, S.V
+    TX = S.FV[5]
+    TV = S.FV[6]
+    S.ints[I_DENSE] = 0
     for p in range(m):
         KX[0, p] = V0[p]
         KV[0, p] = A0[p]
-    for s in range(1, _NS):
+    for s in range(1, _NS + 1):
         for p in range(m):
-            dx = 0.0
-            dv = 0.0
-            for i in range(s):
-                a = _A[s, i]
-                if a != 0.0:
-                    dx += a * KX[i, p]
-                    dv += a * KV[i, p]
-            X[p] = X0[p] + h * dx
-            KX[s, p] = V0[p] + h * dv
+            TX[p] = 0.0
+            TV[p] = 0.0
+        for i in range(s):
+            a = _A[s, i] if s < _NS else _B[i]
+            if a != 0.0:
+                ah = a * h
+                for p in range(m):
+                    TX[p] += ah * KX[i, p]
+                    TV[p] += ah * KV[i, p]
+        for p in range(m):
+            X[p] = X0[p] + TX[p]
+            KX[s, p] = V0[p] + TV[p]
         _rhs(S, X, KV[s])
-    for p in range(m):
-        dx = 0.0
-        dv = 0.0
-        for i in range(_NS):
-            dx += _B[i] * KX[i, p]
-            dv += _B[i] * KV[i, p]
-        X[p] = X0[p] + h * dx
-        V[p] = V0[p] + h * dv
-        KX[_NS, p] = V[p]
-    _rhs(S, X, KV[_NS])
+    # the last pass (s = 12) combined with B: X holds the new positions, KX[12] the
+    # new velocities, KV[12] the new accelerations (first stage of the next step)
     tol = S.fs[F_TOL]
-    err = 0.0
     for p in range(m):
-        e5x = 0.0
-        e3x = 0.0
-        e5v = 0.0
-        e3v = 0.0
+        V[p] = KX[_NS, p]
+        S.A[p] = KV[_NS, p]
+    err = 0.0
+    for comp in range(2):
+        K_ = KX if comp == 0 else KV
+        for p in range(m):
+            TX[p] = 0.0
+            TV[p] = 0.0
         for i in range(_NS + 1):
-            e5x += _E5[i] * KX[i, p]
-            e3x += _E3[i] * KX[i, p]
-            e5v += _E5[i] * KV[i, p]
-            e3v += _E3[i] * KV[i, p]
-        sx = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
-        sv = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
-        d = e5x * e5x + 0.01 * e3x * e3x
-        if d > 0.0:
-            ex = abs(h) * e5x * e5x / np.sqrt(d) / sx
-            if ex > err:
-                err = ex
-        d = e5v * e5v + 0.01 * e3v * e3v
-        if d > 0.0:
-            ev = abs(h) * e5v * e5v / np.sqrt(d) / sv
-            if ev > err:
-                err = ev
+            e5 = _E5[i]
+            e3 = _E3[i]
+            for p in range(m):
+                TX[p] += e5 * K_[i, p]
+                TV[p] += e3 * K_[i, p]
+        for p in range(m):
+            if comp == 0:
+                sc = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
+            else:
+                sc = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
+            e5 = TX[p]
+            d = e5 * e5 + 0.01 * TV[p] * TV[p]
+            if d > 0.0:
+                e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
+                if e > err:
+                    err = e
+    if not np.isfinite(err):
+        return np.inf
+    for p in range(m):
         if not (np.isfinite(X[p]) and np.isfinite(V[p])):
             return np.inf
-    for p in range(m):
-        S.A[p] = KV[_NS, p]
-    S.ints[I_DENSE] = 0
     return err
 
 
@@ -218,22 +226,41 @@ def _dense(S):
     """Build the order-7 interpolant of the last accepted step (3 extra stages)."""
     if S.ints[I_DENSE] == 1:
         return
+    S.ints[I_NDENSE] += 1
     m = S.ints[I_M]
     h = S.fs[F_HLAST]
     KX, KV, X0, V0, X, V, FX, FV = S.KX, S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
-    Xs = FX[6]  # scratch row, overwritten below
+    TX = FX[5]  # scratch rows, overwritten by the interpolant below
+    TV = FV[5]
+    Xs = FX[6]
     for s in range(_NS + 1, _NSE):
         for p in range(m):
-            dx = 0.0
-            dv = 0.0
-            for i in range(s):
-                a = _A[s, i]
-                if a != 0.0:
-                    dx += a * KX[i, p]
-                    dv += a * KV[i, p]
-            Xs[p] = X0[p] + h * dx
-            KX[s, p] = V0[p] + h * dv
+            TX[p] = 0.0
+            TV[p] = 0.0
+        for i in range(s):
+            a = _A[s, i]
+            if a != 0.0:
+                ah = a * h
+                for p in range(m):
+                    TX[p] += ah * KX[i, p]
+                    TV[p] += ah * KV[i, p]
+        for p in range(m):
+            Xs[p] = X0[p] + TX[p]
+            KX[s, p] = V0[p] + TV[p]
         _rhs(S, Xs, KV[s])
+    for r in range(4):
+        FXr = FX[3 + r]
+        FVr = FV[3 + r]
+        for p in range(m):
+            FXr[p] = 0.0
+            FVr[p] = 0.0
+        for i in range(_NSE):
+            d = _D[r, i]
+            if d != 0.0:
+                dh = d * h
+                for p in range(m):
+                    FXr[p] += dh * KX[i, p]
+                    FVr[p] += dh * KV[i, p]
     for p in range(m):
         dx = X[p] - X0[p]
         dv = V[p] - V0[p]
@@ -243,16 +270,6 @@ def _dense(S):
         FV[0, p] = dv
         FV[1, p] = h * KV[0, p] - dv
         FV[2, p] = 2.0 * dv - h * (KV[_NS, p] + KV[0, p])
-        for r in range(4):
-            sx = 0.0
-            sv = 0.0
-            for i in range(_NSE):
-                d = _D[r, i]
-                if d != 0.0:
-                    sx += d * KX[i, p]
-                    sv += d * KV[i, p]
-            FX[3 + r, p] = h * sx
-            FV[3 + r, p] = h * sv
     S.ints[I_DENSE] = 1
 
 
@@ -467,8 +484,9 @@ def _free_ball(S, b):
     S.bmap[b] = -1
     _touch_ball(S, b)
     n = S.ints[I_NFREED]
-    S.freed[n] = b
-    S.ints[I_NFREED] = n + 1
+    if n < S.freed.shape[0]:
+        S.freed[n] = b
+        S.ints[I_NFREED] = n + 1
 
 
 @nb.njit(cache=True)
@@ -629,21 +647,26 @@ def _contact_event(S, j, hcap):
     st = S.cst[j]
     c0, w0, s0 = _contact_at(S, j, 0.0)
     c1, w1, s1 = _contact_at(S, j, 1.0)
-    # bound on how far c can stray from its end values inside the step: h^2/8 |c''|,
-    # with c'' taken at both ends and a safety factor of 4
+    # how far c can stray from its end values inside the step: h^2/8 max|c''|, with
+    # c'' taken at both ends and a safety factor of 2
     pa = S.bmap[j]
     pb = S.bmap[j + 1]
-    g = 0.0
-    if pa >= 0:
-        g = max(abs(S.A0[pa]), abs(S.A[pa]))
-    if pb >= 0:
-        g += max(abs(S.A0[pb]), abs(S.A[pb]))
+    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
+    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
     h = S.fs[F_HLAST]
-    reach = 0.5 * h * h * g
-    if st == ACTIVE or st == FRESH:
-        lev1 = 0.0 if st == ACTIVE else -_rounding(max(s0, s1))
-        lev2 = lev1
+    reach = 0.25 * h * h * max(abs(g0), abs(g1))
+    if st == FRESH:
+        # never pressed beyond eps_rel: its force is below the floor, so it is checked
+        # at the step's end (_release_quiet), like a dormant contact
+        return 2.0, 0, 0.0
+    if st == ACTIVE:
+        lev1 = 0.0
+        lev2 = 0.0
     elif st == DORMANT:
+        # a dormant contact pressed slowly engages at the step's end (_post_step): its
+        # force below LEVEL_LOCATE^alpha is far under rounding; only a fast press is located
+        if c1 < LEVEL_LOCATE:
+            return 2.0, 0, 0.0
         lev1 = LEVEL_DORMANT
         lev2 = -S.fs[F_EPSREL]
     else:
@@ -660,7 +683,7 @@ def _contact_event(S, j, hcap):
         if tb >= hcap:
             tb = hcap
         cb_ = c1 if tb >= 1.0 else _contact_at(S, j, tb)[0]
-        if st == ACTIVE or st == FRESH:
+        if st == ACTIVE:
             if ca > lev1 and cb_ <= lev1:
                 return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_OPEN, lev1
         elif st == DORMANT:
@@ -683,6 +706,26 @@ def _contact_event(S, j, hcap):
 
 
 @nb.njit(cache=True)
+def _stays_positive(c0, c1, w0, w1, g0, g1, h):
+    """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
+
+    Concave: the minimum is at an end. Convex: c lies above both end tangents, whose
+    upper envelope has its minimum at their intersection.
+    """
+    if c0 <= 0.0 or c1 <= 0.0:
+        return False
+    if g0 < 0.0 and g1 < 0.0 and 10.0 * g0 <= g1 and 10.0 * g1 <= g0:
+        return True
+    if g0 > 0.0 and g1 > 0.0 and 10.0 * g0 >= g1 and 10.0 * g1 >= g0:
+        if w0 >= 0.0 or w1 <= 0.0:
+            return True  # monotone over the step: the smaller end is the minimum
+        # tangents c0 + w0 h s and c1 - w1 h (1 - s) meet at s*
+        sst = (c1 - w1 * h - c0) / (h * (w0 - w1))
+        return c0 + w0 * h * sst > 0.0
+    return False
+
+
+@nb.njit(cache=True)
 def _find_event(S):
     """Scan the contacts touching clusters for the earliest event of the last step."""
     best = 2.0
@@ -690,17 +733,28 @@ def _find_event(S):
     bk = 0
     blev = 0.0
     ncont = S.cst.shape[0]
+    h = S.fs[F_HLAST]
+    q = 0.25 * h * h
+    X, X0, A, A0 = S.X, S.X0, S.A, S.A0
     for c in range(S.ints[I_NCL]):
-        j0 = S.clo[c] - 1
-        j1 = S.chi[c]
-        if j0 < 0:
-            j0 = 0
-        if j1 > ncont - 1:
-            j1 = ncont - 1
-        for j in range(j0, j1 + 1):
+        lo = S.clo[c]
+        o = S.coff[c] - lo
+        for j in range(max(lo - 1, 0), min(S.chi[c], ncont - 1) + 1):
             # a boundary shared by two clusters is seen twice: skip the second
-            if j == S.clo[c] - 1 and c > 0 and S.chi[c - 1] == j:
+            if j == lo - 1 and c > 0 and S.chi[c - 1] == j:
                 continue
+            if j >= lo and j < S.chi[c] and S.cst[j] == ACTIVE:
+                # fast path, an internal active contact: can it reach zero in this step?
+                p = o + j
+                c0 = X0[p] - X0[p + 1]
+                c1 = X[p] - X[p + 1]
+                g0 = A0[p] - A0[p + 1]
+                g1 = A[p] - A[p + 1]
+                if min(c0, c1) > q * max(abs(g0), abs(g1)):
+                    continue
+                if _stays_positive(c0, c1, S.V0[p] - S.V0[p + 1], S.V[p] - S.V[p + 1],
+                                   g0, g1, h):
+                    continue
             th, kind, lev = _contact_event(S, j, best)
             if th < best:
                 best = th
@@ -756,11 +810,25 @@ def _snapshot(S, tout):
 
 
 @nb.njit(cache=True)
+def _engage_level(S, j):
+    """Compression beyond which contact j, made inactive now, engages again.
+
+    Its present compression plus eps_rel, and never within rounding of it (at tiny
+    rtol eps_rel is below the rounding of the positions, and a level inside the
+    rounding would flip the contact back and forth).
+    """
+    t = S.fs[F_T]
+    xl = S.bx[j] + S.bv[j] * (t - S.bt[j])
+    xr = S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1])
+    return max(xl - xr, 0.0) + max(S.fs[F_EPSREL], 4.0 * _rounding(abs(xl) + abs(xr)))
+
+
+@nb.njit(cache=True)
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
     if kind == EV_OPEN or kind == EV_RELEASE:
-        ok = _deactivate(S, j, S.fs[F_EPSREL])
+        ok = _deactivate(S, j, _engage_level(S, j))
         _log(S, t, j, kind)
     elif kind == EV_CLOSE:
         ok = _activate(S, j, ACTIVE)
@@ -779,8 +847,9 @@ def _release_quiet(S):
 
     A seasoned contact is released when its relative motion and stored energy could
     not produce a speed above the floor (w^2 + 4 c^(alpha+1)/(alpha+1) < floor^2) and
-    its neighbours do not load it (|c''| < floor). Fresh contacts (at the front of a
-    wave, still below eps_rel) are never released.
+    its neighbours do not load it (|c''| < floor). A fresh contact (at the front of a
+    wave, never pressed beyond eps_rel) is released only when pulled apart beyond
+    the rounding of its positions; it carried no force above the floor.
     """
     floor = S.fs[F_FLOOR]
     epsrel = S.fs[F_EPSREL]
@@ -796,11 +865,15 @@ def _release_quiet(S):
             if st == FRESH:
                 if cj > epsrel:
                     S.cst[j] = ACTIVE
-            elif st == ACTIVE:
+                elif cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
+                    S.jbuf[nrel] = j
+                    nrel += 1
+            elif st == ACTIVE and cj < epsrel:
                 w = S.V[p] - S.V[p + 1]
+                if abs(w) >= floor or abs(S.A[p] - S.A[p + 1]) >= floor:
+                    continue
                 cp = cj if cj > 0.0 else 0.0
-                e = w * w + 4.0 * cp ** (alpha + 1.0) / (alpha + 1.0)
-                if e < floor * floor and abs(S.A[p] - S.A[p + 1]) < floor:
+                if w * w + 4.0 * cp ** (alpha + 1.0) / (alpha + 1.0) < floor * floor:
                     S.jbuf[nrel] = j
                     nrel += 1
     if nrel == 0:
@@ -809,8 +882,7 @@ def _release_quiet(S):
     t = S.fs[F_T]
     for i in range(nrel):
         j = S.jbuf[i]
-        cj = S.bx[j] - S.bx[j + 1]
-        if not _deactivate(S, j, max(cj, 0.0) + epsrel):
+        if not _deactivate(S, j, _engage_level(S, j)):
             return False
         _log(S, t, j, EV_RELEASE)
     return True
@@ -831,10 +903,12 @@ def _due(S, j):
     w = S.bv[j] - S.bv[j + 1]
     r = _rounding(abs(xl) + abs(xr))
     st = S.cst[j]
-    if st == ACTIVE or st == FRESH:
-        lev = 0.0 if st == ACTIVE else -r
-        if (c <= lev + r and w < 0.0) or c < lev - r:
+    if st == ACTIVE:
+        if (c <= r and w < 0.0) or c < -r:
             return EV_OPEN
+    elif st == FRESH:
+        if c < -r:
+            return EV_RELEASE
     elif st == DORMANT:
         if c >= LEVEL_DORMANT:
             return EV_ENGAGE
@@ -849,12 +923,32 @@ def _due(S, j):
 
 
 @nb.njit(cache=True)
+def _dormant_due(S):
+    """Whether a dormant contact at a cluster's edge has been pressed (or pulled) past its levels."""
+    ncont = S.cst.shape[0]
+    for c in range(S.ints[I_NCL]):
+        for j in (S.clo[c] - 1, S.chi[c]):
+            if j < 0 or j >= ncont or S.cst[j] != DORMANT:
+                continue
+            xl, vl, al = _ball_now(S, j)
+            xr, vr, ar = _ball_now(S, j + 1)
+            cj = xl - xr
+            if cj >= LEVEL_DORMANT or cj <= -S.fs[F_EPSREL]:
+                return True
+    return False
+
+
+@nb.njit(cache=True)
 def _settle(S):
     """After a change of structure, apply every event due at this instant (positions synced)."""
     ncont = S.cst.shape[0]
+    budget = 4 * (S.ints[I_M] + 2 * S.ints[I_NCL] + 4)
     changed = True
     while changed:
         changed = False
+        budget -= 1
+        if budget < 0:
+            return False  # contacts flipping back and forth: a defect, reported by the driver
         for c in range(S.ints[I_NCL]):
             j0 = max(S.clo[c] - 1, 0)
             j1 = min(S.chi[c], ncont - 1)
@@ -880,7 +974,10 @@ def _post_step(S):
         if not _apply_event(S, S.ints[I_EVJ], k):
             return False
     elif S.ints[I_M] > 0:
-        if not _release_quiet(S):
+        if _dormant_due(S):
+            _sync(S)
+            S.ints[I_DIRTY] = 1
+        elif not _release_quiet(S):
             return False
     if S.ints[I_DIRTY] == 1:
         return _settle(S)
@@ -986,6 +1083,7 @@ def advance(S):
             hev = th * h
             good = True
             for _ in range(6):
+                S.ints[I_REDO] += 1
                 if not (_step(S, hev) <= 1.0):
                     good = False
                     break
