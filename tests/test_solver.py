@@ -310,3 +310,10 @@ def test_tightest_tolerance_runs_to_the_end():
     sol = simulate(200, 1, 1.0, rtol=1e-15)
     assert_terminal(sol)
     assert sol.diagnostics.momentum_error < 1e-12
+
+
+def test_generated_stages_are_current():
+    """The straight-line DOP853 stages in _kernels.py match scipy's tableau."""
+    from chainrun.solver import _codegen
+
+    assert _codegen.main(["--check"]) == 0

@@ -144,79 +144,158 @@ def _rhs(S, Xs, out):
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
         e = o + S.chi[c] - S.clo[c]
-        out[o] = 0.0
+        prev = 0.0
         for p in range(o, e):
             f = _force(Xs[p] - Xs[p + 1], mode, alpha)
-            out[p] -= f
-            out[p + 1] = f
+            out[p] = prev - f
+            prev = f
+        out[e] = prev
 
 
 # =========================================================================================
 # one DOP853 step for x'' = a(x), y = (x, v), f = (v, a)
 # =========================================================================================
+# ---- BEGIN GENERATED STAGES (python -m chainrun.solver._codegen) ----
 @nb.njit(cache=True)
-def _step(S, h):
-    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm.
+def _stages(S, h):
+    """The 12 stages of a DOP853 step from (X0, V0, A0): new X in X, new V in KX[12].
 
-    Stage sums are accumulated row by row over contiguous compact arrays; rows 5 and 6
-    of FV serve as scratch (any step invalidates the dense output anyway).
+    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations.
     """
     m = S.ints[I_M]
-    KX, KV, X0, V0, A0, X, V = S.KX, S.KV, S.X0, S.V0, S.A0, S.X, S.V
-    TX = S.FV[5]
-    TV = S.FV[6]
-    S.ints[I_DENSE] = 0
+    KX, KV, X0, V0, A0, X = S.KX, S.KV, S.X0, S.V0, S.A0, S.X
     for p in range(m):
         KX[0, p] = V0[p]
         KV[0, p] = A0[p]
-    for s in range(1, _NS + 1):
-        for p in range(m):
-            TX[p] = 0.0
-            TV[p] = 0.0
-        for i in range(s):
-            a = _A[s, i] if s < _NS else _B[i]
-            if a != 0.0:
-                ah = a * h
-                for p in range(m):
-                    TX[p] += ah * KX[i, p]
-                    TV[p] += ah * KV[i, p]
-        for p in range(m):
-            X[p] = X0[p] + TX[p]
-            KX[s, p] = V0[p] + TV[p]
-        _rhs(S, X, KV[s])
-    # the last pass (s = 12) combined with B: X holds the new positions, KX[12] the
-    # new velocities, KV[12] the new accelerations (first stage of the next step)
-    tol = S.fs[F_TOL]
     for p in range(m):
-        V[p] = KX[_NS, p]
-        S.A[p] = KV[_NS, p]
+        X[p] = X0[p] + h * (0.05260015195876773 * KX[0, p])
+        KX[1][p] = V0[p] + h * (0.05260015195876773 * KV[0, p])
+    _rhs(S, X, KV[1])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.0197250569845379 * KX[0, p] + 0.0591751709536137 * KX[1, p])
+        KX[2][p] = V0[p] + h * (0.0197250569845379 * KV[0, p] + 0.0591751709536137 * KV[1, p])
+    _rhs(S, X, KV[2])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.02958758547680685 * KX[0, p] + 0.08876275643042054 * KX[2, p])
+        KX[3][p] = V0[p] + h * (0.02958758547680685 * KV[0, p] + 0.08876275643042054 * KV[2, p])
+    _rhs(S, X, KV[3])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.2413651341592667 * KX[0, p] + -0.8845494793282861 * KX[2, p] + 0.924834003261792 * KX[3, p])
+        KX[4][p] = V0[p] + h * (0.2413651341592667 * KV[0, p] + -0.8845494793282861 * KV[2, p] + 0.924834003261792 * KV[3, p])
+    _rhs(S, X, KV[4])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.037037037037037035 * KX[0, p] + 0.17082860872947386 * KX[3, p] + 0.12546768756682242 * KX[4, p])
+        KX[5][p] = V0[p] + h * (0.037037037037037035 * KV[0, p] + 0.17082860872947386 * KV[3, p] + 0.12546768756682242 * KV[4, p])
+    _rhs(S, X, KV[5])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.037109375 * KX[0, p] + 0.17025221101954405 * KX[3, p] + 0.06021653898045596 * KX[4, p] + -0.017578125 * KX[5, p])
+        KX[6][p] = V0[p] + h * (0.037109375 * KV[0, p] + 0.17025221101954405 * KV[3, p] + 0.06021653898045596 * KV[4, p] + -0.017578125 * KV[5, p])
+    _rhs(S, X, KV[6])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.03709200011850479 * KX[0, p] + 0.17038392571223998 * KX[3, p] + 0.10726203044637328 * KX[4, p] + -0.015319437748624402 * KX[5, p] + 0.008273789163814023 * KX[6, p])
+        KX[7][p] = V0[p] + h * (0.03709200011850479 * KV[0, p] + 0.17038392571223998 * KV[3, p] + 0.10726203044637328 * KV[4, p] + -0.015319437748624402 * KV[5, p] + 0.008273789163814023 * KV[6, p])
+    _rhs(S, X, KV[7])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.6241109587160757 * KX[0, p] + -3.3608926294469414 * KX[3, p] + -0.868219346841726 * KX[4, p] + 27.59209969944671 * KX[5, p] + 20.154067550477894 * KX[6, p] + -43.48988418106996 * KX[7, p])
+        KX[8][p] = V0[p] + h * (0.6241109587160757 * KV[0, p] + -3.3608926294469414 * KV[3, p] + -0.868219346841726 * KV[4, p] + 27.59209969944671 * KV[5, p] + 20.154067550477894 * KV[6, p] + -43.48988418106996 * KV[7, p])
+    _rhs(S, X, KV[8])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.47766253643826434 * KX[0, p] + -2.4881146199716677 * KX[3, p] + -0.590290826836843 * KX[4, p] + 21.230051448181193 * KX[5, p] + 15.279233632882423 * KX[6, p] + -33.28821096898486 * KX[7, p] + -0.020331201708508627 * KX[8, p])
+        KX[9][p] = V0[p] + h * (0.47766253643826434 * KV[0, p] + -2.4881146199716677 * KV[3, p] + -0.590290826836843 * KV[4, p] + 21.230051448181193 * KV[5, p] + 15.279233632882423 * KV[6, p] + -33.28821096898486 * KV[7, p] + -0.020331201708508627 * KV[8, p])
+    _rhs(S, X, KV[9])
+    for p in range(m):
+        X[p] = X0[p] + h * (-0.9371424300859873 * KX[0, p] + 5.186372428844064 * KX[3, p] + 1.0914373489967295 * KX[4, p] + -8.149787010746927 * KX[5, p] + -18.52006565999696 * KX[6, p] + 22.739487099350505 * KX[7, p] + 2.4936055526796523 * KX[8, p] + -3.0467644718982196 * KX[9, p])
+        KX[10][p] = V0[p] + h * (-0.9371424300859873 * KV[0, p] + 5.186372428844064 * KV[3, p] + 1.0914373489967295 * KV[4, p] + -8.149787010746927 * KV[5, p] + -18.52006565999696 * KV[6, p] + 22.739487099350505 * KV[7, p] + 2.4936055526796523 * KV[8, p] + -3.0467644718982196 * KV[9, p])
+    _rhs(S, X, KV[10])
+    for p in range(m):
+        X[p] = X0[p] + h * (2.273310147516538 * KX[0, p] + -10.53449546673725 * KX[3, p] + -2.0008720582248625 * KX[4, p] + -17.9589318631188 * KX[5, p] + 27.94888452941996 * KX[6, p] + -2.8589982771350235 * KX[7, p] + -8.87285693353063 * KX[8, p] + 12.360567175794303 * KX[9, p] + 0.6433927460157636 * KX[10, p])
+        KX[11][p] = V0[p] + h * (2.273310147516538 * KV[0, p] + -10.53449546673725 * KV[3, p] + -2.0008720582248625 * KV[4, p] + -17.9589318631188 * KV[5, p] + 27.94888452941996 * KV[6, p] + -2.8589982771350235 * KV[7, p] + -8.87285693353063 * KV[8, p] + 12.360567175794303 * KV[9, p] + 0.6433927460157636 * KV[10, p])
+    _rhs(S, X, KV[11])
+    for p in range(m):
+        X[p] = X0[p] + h * (0.054293734116568765 * KX[0, p] + 4.450312892752409 * KX[5, p] + 1.8915178993145003 * KX[6, p] + -5.801203960010585 * KX[7, p] + 0.3111643669578199 * KX[8, p] + -0.1521609496625161 * KX[9, p] + 0.20136540080403034 * KX[10, p] + 0.04471061572777259 * KX[11, p])
+        KX[12][p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
+    _rhs(S, X, KV[12])
+
+
+@nb.njit(cache=True)
+def _error_norm(S, h):
+    """DOP853's error estimate of the last step, max over balls, scaled by the tolerance."""
+    m = S.ints[I_M]
+    KX, KV, X0, V0, X, V = S.KX, S.KV, S.X0, S.V0, S.X, S.V
+    tol = S.fs[F_TOL]
     err = 0.0
-    for comp in range(2):
-        K_ = KX if comp == 0 else KV
-        for p in range(m):
-            TX[p] = 0.0
-            TV[p] = 0.0
-        for i in range(_NS + 1):
-            e5 = _E5[i]
-            e3 = _E3[i]
-            for p in range(m):
-                TX[p] += e5 * K_[i, p]
-                TV[p] += e3 * K_[i, p]
-        for p in range(m):
-            if comp == 0:
-                sc = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
-            else:
-                sc = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
-            e5 = TX[p]
-            d = e5 * e5 + 0.01 * TV[p] * TV[p]
-            if d > 0.0:
-                e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
-                if e > err:
-                    err = e
+    for p in range(m):
+        e5 = 1.0 * (0.01312004499419488 * KX[0, p] + -1.2251564463762044 * KX[5, p] + -0.4957589496572502 * KX[6, p] + 1.6643771824549864 * KX[7, p] + -0.35032884874997366 * KX[8, p] + 0.3341791187130175 * KX[9, p] + 0.08192320648511571 * KX[10, p] + -0.022355307863886294 * KX[11, p])
+        e3 = 1.0 * (-0.18980075407240762 * KX[0, p] + 4.450312892752409 * KX[5, p] + 1.8915178993145003 * KX[6, p] + -5.801203960010585 * KX[7, p] + -0.4226823213237919 * KX[8, p] + -0.1521609496625161 * KX[9, p] + 0.20136540080403034 * KX[10, p] + 0.02265179219836082 * KX[11, p])
+        sc = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
+        d = e5 * e5 + 0.01 * e3 * e3
+        if d > 0.0:
+            e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
+            if e > err:
+                err = e
+        e5 = 1.0 * (0.01312004499419488 * KV[0, p] + -1.2251564463762044 * KV[5, p] + -0.4957589496572502 * KV[6, p] + 1.6643771824549864 * KV[7, p] + -0.35032884874997366 * KV[8, p] + 0.3341791187130175 * KV[9, p] + 0.08192320648511571 * KV[10, p] + -0.022355307863886294 * KV[11, p])
+        e3 = 1.0 * (-0.18980075407240762 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + -0.4226823213237919 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.02265179219836082 * KV[11, p])
+        sc = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
+        d = e5 * e5 + 0.01 * e3 * e3
+        if d > 0.0:
+            e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
+            if e > err:
+                err = e
+    return err
+
+
+@nb.njit(cache=True)
+def _dense_stages(S, Xs):
+    """The three extra stages of the dense output, positions staged in Xs."""
+    m = S.ints[I_M]
+    h = S.fs[F_HLAST]
+    KX, KV, X0, V0 = S.KX, S.KV, S.X0, S.V0
+    for p in range(m):
+        Xs[p] = X0[p] + h * (0.056167502283047954 * KX[0, p] + 0.25350021021662483 * KX[6, p] + -0.2462390374708025 * KX[7, p] + -0.12419142326381637 * KX[8, p] + 0.15329179827876568 * KX[9, p] + 0.00820105229563469 * KX[10, p] + 0.007567897660545699 * KX[11, p] + -0.008298 * KX[12, p])
+        KX[13][p] = V0[p] + h * (0.056167502283047954 * KV[0, p] + 0.25350021021662483 * KV[6, p] + -0.2462390374708025 * KV[7, p] + -0.12419142326381637 * KV[8, p] + 0.15329179827876568 * KV[9, p] + 0.00820105229563469 * KV[10, p] + 0.007567897660545699 * KV[11, p] + -0.008298 * KV[12, p])
+    _rhs(S, Xs, KV[13])
+    for p in range(m):
+        Xs[p] = X0[p] + h * (0.03183464816350214 * KX[0, p] + 0.028300909672366776 * KX[5, p] + 0.053541988307438566 * KX[6, p] + -0.05492374857139099 * KX[7, p] + -0.00010834732869724932 * KX[10, p] + 0.0003825710908356584 * KX[11, p] + -0.00034046500868740456 * KX[12, p] + 0.1413124436746325 * KX[13, p])
+        KX[14][p] = V0[p] + h * (0.03183464816350214 * KV[0, p] + 0.028300909672366776 * KV[5, p] + 0.053541988307438566 * KV[6, p] + -0.05492374857139099 * KV[7, p] + -0.00010834732869724932 * KV[10, p] + 0.0003825710908356584 * KV[11, p] + -0.00034046500868740456 * KV[12, p] + 0.1413124436746325 * KV[13, p])
+    _rhs(S, Xs, KV[14])
+    for p in range(m):
+        Xs[p] = X0[p] + h * (-0.42889630158379194 * KX[0, p] + -4.697621415361164 * KX[5, p] + 7.683421196062599 * KX[6, p] + 4.06898981839711 * KX[7, p] + 0.3567271874552811 * KX[8, p] + -0.0013990241651590145 * KX[12, p] + 2.9475147891527724 * KX[13, p] + -9.15095847217987 * KX[14, p])
+        KX[15][p] = V0[p] + h * (-0.42889630158379194 * KV[0, p] + -4.697621415361164 * KV[5, p] + 7.683421196062599 * KV[6, p] + 4.06898981839711 * KV[7, p] + 0.3567271874552811 * KV[8, p] + -0.0013990241651590145 * KV[12, p] + 2.9475147891527724 * KV[13, p] + -9.15095847217987 * KV[14, p])
+    _rhs(S, Xs, KV[15])
+
+
+@nb.njit(cache=True)
+def _dense_rows(S):
+    """Rows 3..6 of the interpolant: h * D @ K for positions and velocities."""
+    m = S.ints[I_M]
+    h = S.fs[F_HLAST]
+    KX, KV, FX, FV = S.KX, S.KV, S.FX, S.FV
+    for p in range(m):
+        FX[3, p] = h * (-8.428938276109013 * KX[0, p] + 0.5667149535193777 * KX[5, p] + -3.0689499459498917 * KX[6, p] + 2.38466765651207 * KX[7, p] + 2.117034582445028 * KX[8, p] + -0.871391583777973 * KX[9, p] + 2.2404374302607883 * KX[10, p] + 0.6315787787694688 * KX[11, p] + -0.08899033645133331 * KX[12, p] + 18.148505520854727 * KX[13, p] + -9.194632392478356 * KX[14, p] + -4.436036387594894 * KX[15, p])
+        FV[3, p] = h * (-8.428938276109013 * KV[0, p] + 0.5667149535193777 * KV[5, p] + -3.0689499459498917 * KV[6, p] + 2.38466765651207 * KV[7, p] + 2.117034582445028 * KV[8, p] + -0.871391583777973 * KV[9, p] + 2.2404374302607883 * KV[10, p] + 0.6315787787694688 * KV[11, p] + -0.08899033645133331 * KV[12, p] + 18.148505520854727 * KV[13, p] + -9.194632392478356 * KV[14, p] + -4.436036387594894 * KV[15, p])
+        FX[4, p] = h * (10.427508642579134 * KX[0, p] + 242.28349177525817 * KX[5, p] + 165.20045171727028 * KX[6, p] + -374.5467547226902 * KX[7, p] + -22.113666853125306 * KX[8, p] + 7.733432668472264 * KX[9, p] + -30.674084731089398 * KX[10, p] + -9.332130526430229 * KX[11, p] + 15.697238121770845 * KX[12, p] + -31.139403219565178 * KX[13, p] + -9.35292435884448 * KX[14, p] + 35.81684148639408 * KX[15, p])
+        FV[4, p] = h * (10.427508642579134 * KV[0, p] + 242.28349177525817 * KV[5, p] + 165.20045171727028 * KV[6, p] + -374.5467547226902 * KV[7, p] + -22.113666853125306 * KV[8, p] + 7.733432668472264 * KV[9, p] + -30.674084731089398 * KV[10, p] + -9.332130526430229 * KV[11, p] + 15.697238121770845 * KV[12, p] + -31.139403219565178 * KV[13, p] + -9.35292435884448 * KV[14, p] + 35.81684148639408 * KV[15, p])
+        FX[5, p] = h * (19.985053242002433 * KX[0, p] + -387.0373087493518 * KX[5, p] + -189.17813819516758 * KX[6, p] + 527.8081592054236 * KX[7, p] + -11.57390253995963 * KX[8, p] + 6.8812326946963 * KX[9, p] + -1.0006050966910838 * KX[10, p] + 0.7777137798053443 * KX[11, p] + -2.778205752353508 * KX[12, p] + -60.19669523126412 * KX[13, p] + 84.32040550667716 * KX[14, p] + 11.99229113618279 * KX[15, p])
+        FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
+        FX[6, p] = h * (-25.69393346270375 * KX[0, p] + -154.18974869023643 * KX[5, p] + -231.5293791760455 * KX[6, p] + 357.6391179106141 * KX[7, p] + 93.40532418362432 * KX[8, p] + -37.45832313645163 * KX[9, p] + 104.0996495089623 * KX[10, p] + 29.8402934266605 * KX[11, p] + -43.53345659001114 * KX[12, p] + 96.32455395918828 * KX[13, p] + -39.17726167561544 * KX[14, p] + -149.72683625798564 * KX[15, p])
+        FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
+# ---- END GENERATED STAGES ----
+
+
+@nb.njit(cache=True)
+def _step(S, h):
+    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm."""
+    m = S.ints[I_M]
+    S.ints[I_DENSE] = 0
+    _stages(S, h)
+    for p in range(m):
+        S.V[p] = S.KX[_NS, p]
+        S.A[p] = S.KV[_NS, p]
+    err = _error_norm(S, h)
     if not np.isfinite(err):
         return np.inf
     for p in range(m):
-        if not (np.isfinite(X[p]) and np.isfinite(V[p])):
+        if not (np.isfinite(S.X[p]) and np.isfinite(S.V[p])):
             return np.inf
     return err
 
@@ -230,37 +309,8 @@ def _dense(S):
     m = S.ints[I_M]
     h = S.fs[F_HLAST]
     KX, KV, X0, V0, X, V, FX, FV = S.KX, S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
-    TX = FX[5]  # scratch rows, overwritten by the interpolant below
-    TV = FV[5]
-    Xs = FX[6]
-    for s in range(_NS + 1, _NSE):
-        for p in range(m):
-            TX[p] = 0.0
-            TV[p] = 0.0
-        for i in range(s):
-            a = _A[s, i]
-            if a != 0.0:
-                ah = a * h
-                for p in range(m):
-                    TX[p] += ah * KX[i, p]
-                    TV[p] += ah * KV[i, p]
-        for p in range(m):
-            Xs[p] = X0[p] + TX[p]
-            KX[s, p] = V0[p] + TV[p]
-        _rhs(S, Xs, KV[s])
-    for r in range(4):
-        FXr = FX[3 + r]
-        FVr = FV[3 + r]
-        for p in range(m):
-            FXr[p] = 0.0
-            FVr[p] = 0.0
-        for i in range(_NSE):
-            d = _D[r, i]
-            if d != 0.0:
-                dh = d * h
-                for p in range(m):
-                    FXr[p] += dh * KX[i, p]
-                    FVr[p] += dh * KV[i, p]
+    _dense_stages(S, FX[6])  # FX[6] is scratch until the rows are written
+    _dense_rows(S)
     for p in range(m):
         dx = X[p] - X0[p]
         dv = V[p] - V0[p]
@@ -283,7 +333,7 @@ def _poly(F, y0, p, th):
 # =========================================================================================
 # positions of any ball inside the last step (theta in [0, 1]) or now
 # =========================================================================================
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _ball_at(S, b, th):
     """(x, v) of ball b at t_prev + th * h_last (dense output needs _dense first)."""
     p = S.bmap[b]
@@ -297,7 +347,7 @@ def _ball_at(S, b, th):
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _ball_now(S, b):
     p = S.bmap[b]
     if p >= 0:
@@ -417,7 +467,7 @@ def _schedule_pair(S, j):
 # =========================================================================================
 # cluster bookkeeping (the list is sorted by lo and small)
 # =========================================================================================
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _find_cluster(S, b):
     lo = 0
     hi = S.ints[I_NCL] - 1
@@ -468,7 +518,7 @@ def _insert_cluster(S, lo, hi):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _touch_ball(S, b):
     """Invalidate predictions involving ball b."""
     if b - 1 >= 0:
@@ -547,9 +597,7 @@ def _rebuild(S):
     if m > S.X.shape[0]:
         return m
     for p in range(S.ints[I_M]):
-        b = S.cb[p]
-        if _find_cluster(S, b) < 0:
-            S.bmap[b] = -1
+        S.bmap[S.cb[p]] = -1
     t = S.fs[F_T]
     p = 0
     for c in range(ncl):
@@ -578,7 +626,7 @@ def _rebuild(S):
 # =========================================================================================
 # events
 # =========================================================================================
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _log(S, t, j, kind):
     n = S.ints[I_NEV]
     S.ev_t[n] = t
@@ -588,7 +636,7 @@ def _log(S, t, j, kind):
     S.ints[I_EVTOTAL] += 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _contact_at(S, j, th):
     xl, vl = _ball_at(S, j, th)
     xr, vr = _ball_at(S, j + 1, th)
@@ -627,7 +675,7 @@ def _crossing(S, j, ta, tb, ca, cb_, level):
     return tb
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _rounding(scale):
     return 16.0 * EPS * max(1.0, scale)
 
@@ -705,7 +753,7 @@ def _contact_event(S, j, hcap):
     return 2.0, 0, 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
 
@@ -888,7 +936,7 @@ def _release_quiet(S):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _due(S, j):
     """The event contact j is due at this instant, if its state disagrees with its motion.
 
@@ -984,7 +1032,7 @@ def _post_step(S):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _end_ball(S, b, t):
     p = S.bmap[b]
     if p >= 0:
