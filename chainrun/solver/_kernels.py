@@ -754,6 +754,16 @@ def _contact_event(S, j, hcap):
 
 
 @nb.njit(cache=True, inline="always")
+def _gap_curvature(S, j):
+    """max |c''| of contact j at the two ends of the last step."""
+    pa = S.bmap[j]
+    pb = S.bmap[j + 1]
+    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
+    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
+    return max(abs(g0), abs(g1))
+
+
+@nb.njit(cache=True, inline="always")
 def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
 
@@ -791,7 +801,19 @@ def _find_event(S):
             # a boundary shared by two clusters is seen twice: skip the second
             if j == lo - 1 and c > 0 and S.chi[c - 1] == j:
                 continue
-            if j >= lo and j < S.chi[c] and S.cst[j] == ACTIVE:
+            st = S.cst[j]
+            if st == FRESH:
+                continue  # checked at the step's end (_release_quiet)
+            if st == DORMANT or st == OPEN:
+                # quick rejections; the general path below repeats them exactly
+                cq0 = _contact_at(S, j, 0.0)[0]
+                cq1 = _contact_at(S, j, 1.0)[0]
+                if st == DORMANT:
+                    if cq1 < LEVEL_LOCATE:
+                        continue
+                elif max(cq0, cq1) + q * _gap_curvature(S, j) < 0.0:
+                    continue  # stays open: below both of its levels (0 and lvl > 0)
+            if j >= lo and j < S.chi[c] and st == ACTIVE:
                 # fast path, an internal active contact: can it reach zero in this step?
                 p = o + j
                 c0 = X0[p] - X0[p + 1]
