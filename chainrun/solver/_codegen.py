@@ -28,12 +28,31 @@ def _combo(coefs, rows: str, scale: str) -> str:
     return f"{scale} * (" + " + ".join(terms) + ")"
 
 
-def _stage_pass(out_x: str, out_kx: str, coefs) -> list[str]:
+def _stage_pass(out_x: str, s: int, coefs) -> list[str]:
+    """Stage s: positions into out_x, velocities into KX[s], accelerations into KV[s]."""
     return [
         "    for p in range(m):",
         f"        {out_x}[p] = X0[p] + {_combo(coefs, 'KX', 'h')}",
-        f"        {out_kx}[p] = V0[p] + {_combo(coefs, 'KV', 'h')}",
+        f"        KX[{s}, p] = V0[p] + {_combo(coefs, 'KV', 'h')}",
+        "    for c in range(ncl):",
+        "        o = coff[c]",
+        "        e = o + chi[c] - clo[c]",
+        "        prev = 0.0",
+        "        for p in range(o, e):",
+        f"            f = _force({out_x}[p] - {out_x}[p + 1], mode, alpha)",
+        f"            KV[{s}, p] = prev - f",
+        "            prev = f",
+        f"        KV[{s}, e] = prev",
     ]
+
+
+_PROLOGUE = [
+    "    m = S.ints[I_M]",
+    "    ncl = S.ints[I_NCL]",
+    "    mode = S.ints[I_MODE]",
+    "    alpha = S.fs[F_ALPHA]",
+    "    coff, clo, chi = S.coff, S.clo, S.chi",
+]
 
 
 def generate() -> str:
@@ -45,19 +64,18 @@ def generate() -> str:
         "def _stages(S, h):",
         '    """The 12 stages of a DOP853 step from (X0, V0, A0): new X in X, new V in KX[12].',
         "",
-        "    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations.",
+        "    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations",
+        "    (the force loop of _rhs, written out so no array view is made per stage).",
         '    """',
-        "    m = S.ints[I_M]",
+        *_PROLOGUE,
         "    KX, KV, X0, V0, A0, X = S.KX, S.KV, S.X0, S.V0, S.A0, S.X",
         "    for p in range(m):",
         "        KX[0, p] = V0[p]",
         "        KV[0, p] = A0[p]",
     ]
     for s in range(1, ns):
-        lines += _stage_pass("X", f"KX[{s}]", A[s, :s])
-        lines.append(f"    _rhs(S, X, KV[{s}])")
-    lines += _stage_pass("X", f"KX[{ns}]", B)
-    lines.append(f"    _rhs(S, X, KV[{ns}])")
+        lines += _stage_pass("X", s, A[s, :s])
+    lines += _stage_pass("X", ns, B)
     lines += [
         "",
         "",
@@ -86,15 +104,14 @@ def generate() -> str:
         "",
         "",
         "@nb.njit(cache=True)",
-        "def _dense_stages(S, Xs):",
-        '    """The three extra stages of the dense output, positions staged in Xs."""',
-        "    m = S.ints[I_M]",
+        "def _dense_stages(S):",
+        '    """The three extra stages of the dense output (positions staged in XS)."""',
+        *_PROLOGUE,
         "    h = S.fs[F_HLAST]",
-        "    KX, KV, X0, V0 = S.KX, S.KV, S.X0, S.V0",
+        "    KX, KV, X0, V0, Xs = S.KX, S.KV, S.X0, S.V0, S.XS",
     ]
     for s in range(ns + 1, nse):
-        lines += _stage_pass("Xs", f"KX[{s}]", A[s, :s])
-        lines.append(f"    _rhs(S, Xs, KV[{s}])")
+        lines += _stage_pass("Xs", s, A[s, :s])
     lines += [
         "",
         "",

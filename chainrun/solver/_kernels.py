@@ -42,6 +42,9 @@ from collections import namedtuple
 
 import numba as nb
 import numpy as np
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 # ---- DOP853 tableau (scipy's copy of Hairer's coefficients) --------------------------
@@ -106,7 +109,7 @@ State = namedtuple(
         # clusters
         "clo", "chi", "coff",
         # compact (integrated) balls
-        "cb", "X", "V", "A", "X0", "V0", "A0", "KX", "KV", "FX", "FV",
+        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "KX", "KV", "FX", "FV",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
         # event log buffer
@@ -119,6 +122,74 @@ State = namedtuple(
         "fs", "ints",
     ],
 )
+
+
+
+
+@intrinsic
+def _borrowed(typingctx, arr):
+    """A view of ``arr`` that does not own it: no reference counting on its use.
+
+    Every array handed to a compiled call is reference counted with an atomic
+    increment and decrement; with some forty arrays in the state, that was a third
+    of the run time. The driver holds the state for the whole ``advance`` call, so
+    views with a null meminfo are safe inside it.
+    """
+    if not isinstance(arr, types.Array):
+        return None
+
+    def codegen(context, builder, sig, args):
+        src = context.make_array(arr)(context, builder, value=args[0])
+        out = context.make_array(arr)(context, builder)
+        for name in ("nitems", "itemsize", "data", "shape", "strides"):
+            setattr(out, name, getattr(src, name))
+        out.meminfo = cgutils.get_null_value(out.meminfo.type)
+        out.parent = cgutils.get_null_value(out.parent.type)
+        return out._getvalue()
+
+    return arr(arr), codegen
+
+
+@nb.njit(cache=True)
+def _borrowed_state(S):
+    return State(
+        _borrowed(S.bx),
+        _borrowed(S.bv),
+        _borrowed(S.bt),
+        _borrowed(S.sep_t),
+        _borrowed(S.sep_v),
+        _borrowed(S.bmap),
+        _borrowed(S.cst),
+        _borrowed(S.lvl),
+        _borrowed(S.stamp),
+        _borrowed(S.clo),
+        _borrowed(S.chi),
+        _borrowed(S.coff),
+        _borrowed(S.cb),
+        _borrowed(S.X),
+        _borrowed(S.V),
+        _borrowed(S.A),
+        _borrowed(S.X0),
+        _borrowed(S.V0),
+        _borrowed(S.A0),
+        _borrowed(S.XS),
+        _borrowed(S.KX),
+        _borrowed(S.KV),
+        _borrowed(S.FX),
+        _borrowed(S.FV),
+        _borrowed(S.hp_t),
+        _borrowed(S.hp_j),
+        _borrowed(S.hp_s),
+        _borrowed(S.ev_t),
+        _borrowed(S.ev_j),
+        _borrowed(S.ev_k),
+        _borrowed(S.ox),
+        _borrowed(S.ov),
+        _borrowed(S.freed),
+        _borrowed(S.jbuf),
+        _borrowed(S.fs),
+        _borrowed(S.ints),
+    )
 
 
 # =========================================================================================
@@ -160,61 +231,162 @@ def _rhs(S, Xs, out):
 def _stages(S, h):
     """The 12 stages of a DOP853 step from (X0, V0, A0): new X in X, new V in KX[12].
 
-    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations.
+    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations
+    (the force loop of _rhs, written out so no array view is made per stage).
     """
     m = S.ints[I_M]
+    ncl = S.ints[I_NCL]
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    coff, clo, chi = S.coff, S.clo, S.chi
     KX, KV, X0, V0, A0, X = S.KX, S.KV, S.X0, S.V0, S.A0, S.X
     for p in range(m):
         KX[0, p] = V0[p]
         KV[0, p] = A0[p]
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * KX[0, p])
-        KX[1][p] = V0[p] + h * (0.05260015195876773 * KV[0, p])
-    _rhs(S, X, KV[1])
+        KX[1, p] = V0[p] + h * (0.05260015195876773 * KV[0, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[1, p] = prev - f
+            prev = f
+        KV[1, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.0197250569845379 * KX[0, p] + 0.0591751709536137 * KX[1, p])
-        KX[2][p] = V0[p] + h * (0.0197250569845379 * KV[0, p] + 0.0591751709536137 * KV[1, p])
-    _rhs(S, X, KV[2])
+        KX[2, p] = V0[p] + h * (0.0197250569845379 * KV[0, p] + 0.0591751709536137 * KV[1, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[2, p] = prev - f
+            prev = f
+        KV[2, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.02958758547680685 * KX[0, p] + 0.08876275643042054 * KX[2, p])
-        KX[3][p] = V0[p] + h * (0.02958758547680685 * KV[0, p] + 0.08876275643042054 * KV[2, p])
-    _rhs(S, X, KV[3])
+        KX[3, p] = V0[p] + h * (0.02958758547680685 * KV[0, p] + 0.08876275643042054 * KV[2, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[3, p] = prev - f
+            prev = f
+        KV[3, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.2413651341592667 * KX[0, p] + -0.8845494793282861 * KX[2, p] + 0.924834003261792 * KX[3, p])
-        KX[4][p] = V0[p] + h * (0.2413651341592667 * KV[0, p] + -0.8845494793282861 * KV[2, p] + 0.924834003261792 * KV[3, p])
-    _rhs(S, X, KV[4])
+        KX[4, p] = V0[p] + h * (0.2413651341592667 * KV[0, p] + -0.8845494793282861 * KV[2, p] + 0.924834003261792 * KV[3, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[4, p] = prev - f
+            prev = f
+        KV[4, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.037037037037037035 * KX[0, p] + 0.17082860872947386 * KX[3, p] + 0.12546768756682242 * KX[4, p])
-        KX[5][p] = V0[p] + h * (0.037037037037037035 * KV[0, p] + 0.17082860872947386 * KV[3, p] + 0.12546768756682242 * KV[4, p])
-    _rhs(S, X, KV[5])
+        KX[5, p] = V0[p] + h * (0.037037037037037035 * KV[0, p] + 0.17082860872947386 * KV[3, p] + 0.12546768756682242 * KV[4, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[5, p] = prev - f
+            prev = f
+        KV[5, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.037109375 * KX[0, p] + 0.17025221101954405 * KX[3, p] + 0.06021653898045596 * KX[4, p] + -0.017578125 * KX[5, p])
-        KX[6][p] = V0[p] + h * (0.037109375 * KV[0, p] + 0.17025221101954405 * KV[3, p] + 0.06021653898045596 * KV[4, p] + -0.017578125 * KV[5, p])
-    _rhs(S, X, KV[6])
+        KX[6, p] = V0[p] + h * (0.037109375 * KV[0, p] + 0.17025221101954405 * KV[3, p] + 0.06021653898045596 * KV[4, p] + -0.017578125 * KV[5, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[6, p] = prev - f
+            prev = f
+        KV[6, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.03709200011850479 * KX[0, p] + 0.17038392571223998 * KX[3, p] + 0.10726203044637328 * KX[4, p] + -0.015319437748624402 * KX[5, p] + 0.008273789163814023 * KX[6, p])
-        KX[7][p] = V0[p] + h * (0.03709200011850479 * KV[0, p] + 0.17038392571223998 * KV[3, p] + 0.10726203044637328 * KV[4, p] + -0.015319437748624402 * KV[5, p] + 0.008273789163814023 * KV[6, p])
-    _rhs(S, X, KV[7])
+        KX[7, p] = V0[p] + h * (0.03709200011850479 * KV[0, p] + 0.17038392571223998 * KV[3, p] + 0.10726203044637328 * KV[4, p] + -0.015319437748624402 * KV[5, p] + 0.008273789163814023 * KV[6, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[7, p] = prev - f
+            prev = f
+        KV[7, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.6241109587160757 * KX[0, p] + -3.3608926294469414 * KX[3, p] + -0.868219346841726 * KX[4, p] + 27.59209969944671 * KX[5, p] + 20.154067550477894 * KX[6, p] + -43.48988418106996 * KX[7, p])
-        KX[8][p] = V0[p] + h * (0.6241109587160757 * KV[0, p] + -3.3608926294469414 * KV[3, p] + -0.868219346841726 * KV[4, p] + 27.59209969944671 * KV[5, p] + 20.154067550477894 * KV[6, p] + -43.48988418106996 * KV[7, p])
-    _rhs(S, X, KV[8])
+        KX[8, p] = V0[p] + h * (0.6241109587160757 * KV[0, p] + -3.3608926294469414 * KV[3, p] + -0.868219346841726 * KV[4, p] + 27.59209969944671 * KV[5, p] + 20.154067550477894 * KV[6, p] + -43.48988418106996 * KV[7, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[8, p] = prev - f
+            prev = f
+        KV[8, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.47766253643826434 * KX[0, p] + -2.4881146199716677 * KX[3, p] + -0.590290826836843 * KX[4, p] + 21.230051448181193 * KX[5, p] + 15.279233632882423 * KX[6, p] + -33.28821096898486 * KX[7, p] + -0.020331201708508627 * KX[8, p])
-        KX[9][p] = V0[p] + h * (0.47766253643826434 * KV[0, p] + -2.4881146199716677 * KV[3, p] + -0.590290826836843 * KV[4, p] + 21.230051448181193 * KV[5, p] + 15.279233632882423 * KV[6, p] + -33.28821096898486 * KV[7, p] + -0.020331201708508627 * KV[8, p])
-    _rhs(S, X, KV[9])
+        KX[9, p] = V0[p] + h * (0.47766253643826434 * KV[0, p] + -2.4881146199716677 * KV[3, p] + -0.590290826836843 * KV[4, p] + 21.230051448181193 * KV[5, p] + 15.279233632882423 * KV[6, p] + -33.28821096898486 * KV[7, p] + -0.020331201708508627 * KV[8, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[9, p] = prev - f
+            prev = f
+        KV[9, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (-0.9371424300859873 * KX[0, p] + 5.186372428844064 * KX[3, p] + 1.0914373489967295 * KX[4, p] + -8.149787010746927 * KX[5, p] + -18.52006565999696 * KX[6, p] + 22.739487099350505 * KX[7, p] + 2.4936055526796523 * KX[8, p] + -3.0467644718982196 * KX[9, p])
-        KX[10][p] = V0[p] + h * (-0.9371424300859873 * KV[0, p] + 5.186372428844064 * KV[3, p] + 1.0914373489967295 * KV[4, p] + -8.149787010746927 * KV[5, p] + -18.52006565999696 * KV[6, p] + 22.739487099350505 * KV[7, p] + 2.4936055526796523 * KV[8, p] + -3.0467644718982196 * KV[9, p])
-    _rhs(S, X, KV[10])
+        KX[10, p] = V0[p] + h * (-0.9371424300859873 * KV[0, p] + 5.186372428844064 * KV[3, p] + 1.0914373489967295 * KV[4, p] + -8.149787010746927 * KV[5, p] + -18.52006565999696 * KV[6, p] + 22.739487099350505 * KV[7, p] + 2.4936055526796523 * KV[8, p] + -3.0467644718982196 * KV[9, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[10, p] = prev - f
+            prev = f
+        KV[10, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (2.273310147516538 * KX[0, p] + -10.53449546673725 * KX[3, p] + -2.0008720582248625 * KX[4, p] + -17.9589318631188 * KX[5, p] + 27.94888452941996 * KX[6, p] + -2.8589982771350235 * KX[7, p] + -8.87285693353063 * KX[8, p] + 12.360567175794303 * KX[9, p] + 0.6433927460157636 * KX[10, p])
-        KX[11][p] = V0[p] + h * (2.273310147516538 * KV[0, p] + -10.53449546673725 * KV[3, p] + -2.0008720582248625 * KV[4, p] + -17.9589318631188 * KV[5, p] + 27.94888452941996 * KV[6, p] + -2.8589982771350235 * KV[7, p] + -8.87285693353063 * KV[8, p] + 12.360567175794303 * KV[9, p] + 0.6433927460157636 * KV[10, p])
-    _rhs(S, X, KV[11])
+        KX[11, p] = V0[p] + h * (2.273310147516538 * KV[0, p] + -10.53449546673725 * KV[3, p] + -2.0008720582248625 * KV[4, p] + -17.9589318631188 * KV[5, p] + 27.94888452941996 * KV[6, p] + -2.8589982771350235 * KV[7, p] + -8.87285693353063 * KV[8, p] + 12.360567175794303 * KV[9, p] + 0.6433927460157636 * KV[10, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[11, p] = prev - f
+            prev = f
+        KV[11, e] = prev
     for p in range(m):
         X[p] = X0[p] + h * (0.054293734116568765 * KX[0, p] + 4.450312892752409 * KX[5, p] + 1.8915178993145003 * KX[6, p] + -5.801203960010585 * KX[7, p] + 0.3111643669578199 * KX[8, p] + -0.1521609496625161 * KX[9, p] + 0.20136540080403034 * KX[10, p] + 0.04471061572777259 * KX[11, p])
-        KX[12][p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
-    _rhs(S, X, KV[12])
+        KX[12, p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(X[p] - X[p + 1], mode, alpha)
+            KV[12, p] = prev - f
+            prev = f
+        KV[12, e] = prev
 
 
 @nb.njit(cache=True)
@@ -245,23 +417,51 @@ def _error_norm(S, h):
 
 
 @nb.njit(cache=True)
-def _dense_stages(S, Xs):
-    """The three extra stages of the dense output, positions staged in Xs."""
+def _dense_stages(S):
+    """The three extra stages of the dense output (positions staged in XS)."""
     m = S.ints[I_M]
+    ncl = S.ints[I_NCL]
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    coff, clo, chi = S.coff, S.clo, S.chi
     h = S.fs[F_HLAST]
-    KX, KV, X0, V0 = S.KX, S.KV, S.X0, S.V0
+    KX, KV, X0, V0, Xs = S.KX, S.KV, S.X0, S.V0, S.XS
     for p in range(m):
         Xs[p] = X0[p] + h * (0.056167502283047954 * KX[0, p] + 0.25350021021662483 * KX[6, p] + -0.2462390374708025 * KX[7, p] + -0.12419142326381637 * KX[8, p] + 0.15329179827876568 * KX[9, p] + 0.00820105229563469 * KX[10, p] + 0.007567897660545699 * KX[11, p] + -0.008298 * KX[12, p])
-        KX[13][p] = V0[p] + h * (0.056167502283047954 * KV[0, p] + 0.25350021021662483 * KV[6, p] + -0.2462390374708025 * KV[7, p] + -0.12419142326381637 * KV[8, p] + 0.15329179827876568 * KV[9, p] + 0.00820105229563469 * KV[10, p] + 0.007567897660545699 * KV[11, p] + -0.008298 * KV[12, p])
-    _rhs(S, Xs, KV[13])
+        KX[13, p] = V0[p] + h * (0.056167502283047954 * KV[0, p] + 0.25350021021662483 * KV[6, p] + -0.2462390374708025 * KV[7, p] + -0.12419142326381637 * KV[8, p] + 0.15329179827876568 * KV[9, p] + 0.00820105229563469 * KV[10, p] + 0.007567897660545699 * KV[11, p] + -0.008298 * KV[12, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(Xs[p] - Xs[p + 1], mode, alpha)
+            KV[13, p] = prev - f
+            prev = f
+        KV[13, e] = prev
     for p in range(m):
         Xs[p] = X0[p] + h * (0.03183464816350214 * KX[0, p] + 0.028300909672366776 * KX[5, p] + 0.053541988307438566 * KX[6, p] + -0.05492374857139099 * KX[7, p] + -0.00010834732869724932 * KX[10, p] + 0.0003825710908356584 * KX[11, p] + -0.00034046500868740456 * KX[12, p] + 0.1413124436746325 * KX[13, p])
-        KX[14][p] = V0[p] + h * (0.03183464816350214 * KV[0, p] + 0.028300909672366776 * KV[5, p] + 0.053541988307438566 * KV[6, p] + -0.05492374857139099 * KV[7, p] + -0.00010834732869724932 * KV[10, p] + 0.0003825710908356584 * KV[11, p] + -0.00034046500868740456 * KV[12, p] + 0.1413124436746325 * KV[13, p])
-    _rhs(S, Xs, KV[14])
+        KX[14, p] = V0[p] + h * (0.03183464816350214 * KV[0, p] + 0.028300909672366776 * KV[5, p] + 0.053541988307438566 * KV[6, p] + -0.05492374857139099 * KV[7, p] + -0.00010834732869724932 * KV[10, p] + 0.0003825710908356584 * KV[11, p] + -0.00034046500868740456 * KV[12, p] + 0.1413124436746325 * KV[13, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(Xs[p] - Xs[p + 1], mode, alpha)
+            KV[14, p] = prev - f
+            prev = f
+        KV[14, e] = prev
     for p in range(m):
         Xs[p] = X0[p] + h * (-0.42889630158379194 * KX[0, p] + -4.697621415361164 * KX[5, p] + 7.683421196062599 * KX[6, p] + 4.06898981839711 * KX[7, p] + 0.3567271874552811 * KX[8, p] + -0.0013990241651590145 * KX[12, p] + 2.9475147891527724 * KX[13, p] + -9.15095847217987 * KX[14, p])
-        KX[15][p] = V0[p] + h * (-0.42889630158379194 * KV[0, p] + -4.697621415361164 * KV[5, p] + 7.683421196062599 * KV[6, p] + 4.06898981839711 * KV[7, p] + 0.3567271874552811 * KV[8, p] + -0.0013990241651590145 * KV[12, p] + 2.9475147891527724 * KV[13, p] + -9.15095847217987 * KV[14, p])
-    _rhs(S, Xs, KV[15])
+        KX[15, p] = V0[p] + h * (-0.42889630158379194 * KV[0, p] + -4.697621415361164 * KV[5, p] + 7.683421196062599 * KV[6, p] + 4.06898981839711 * KV[7, p] + 0.3567271874552811 * KV[8, p] + -0.0013990241651590145 * KV[12, p] + 2.9475147891527724 * KV[13, p] + -9.15095847217987 * KV[14, p])
+    for c in range(ncl):
+        o = coff[c]
+        e = o + chi[c] - clo[c]
+        prev = 0.0
+        for p in range(o, e):
+            f = _force(Xs[p] - Xs[p + 1], mode, alpha)
+            KV[15, p] = prev - f
+            prev = f
+        KV[15, e] = prev
 
 
 @nb.njit(cache=True)
@@ -309,7 +509,7 @@ def _dense(S):
     m = S.ints[I_M]
     h = S.fs[F_HLAST]
     KX, KV, X0, V0, X, V, FX, FV = S.KX, S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
-    _dense_stages(S, FX[6])  # FX[6] is scratch until the rows are written
+    _dense_stages(S)
     _dense_rows(S)
     for p in range(m):
         dx = X[p] - X0[p]
@@ -1064,6 +1264,15 @@ def _end_ball(S, b, t):
 
 @nb.njit(cache=True)
 def advance(S):
+    """Run until something needs the driver; return a status code (ST_*).
+
+    See ``_advance``; the state's arrays are used through borrowed views.
+    """
+    return _advance(_borrowed_state(S))
+
+
+@nb.njit(cache=True)
+def _advance(S):
     """Run until something needs the driver; return a status code (ST_*).
 
     The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
