@@ -137,17 +137,24 @@ class Solution:
     diagnostics: Diagnostics = field(repr=False)
 
 
+#: The floor never goes below the rounding noise of order-one velocities: behind a
+#: Hertz wave, balls at rest carry velocities of +-5e-16 whatever the tolerance, and
+#: a floor inside that noise turns it into an endless stream of collisions.
+FLOOR_MIN = 1e-13
+
+
 def velocity_floor(rtol: float) -> float:
-    """The approach speed below which a collision does not count.
+    """The approach speed below which a collision does not count: max(rtol, 1e-13).
 
     Velocities are of order 1 in paper units, so a step accurate to ``rtol`` cannot
-    resolve relative speeds below about ``rtol``; behind a Hertz wave, rounding leaves
-    velocities near 1e-15 whose "collisions" would go on until t ~ 1e10. Pairs
-    approaching slower than the floor are not collisions, and a contact whose
-    compression rate is below it and whose stored energy could not produce it is
-    released. Ignoring them changes a final velocity by at most about the floor.
+    resolve relative speeds below about ``rtol``, nor can any computation resolve
+    them below the rounding noise (``FLOOR_MIN``). Behind a Hertz wave, rounding
+    leaves velocities near 1e-15 whose "collisions" would go on until t ~ 1e10.
+    Pairs approaching slower than the floor are not collisions, and a contact whose
+    compression rate and load are below it and whose stored energy could not produce
+    it is released. Ignoring them changes a final velocity by at most about the floor.
     """
-    return float(rtol)
+    return max(float(rtol), FLOOR_MIN)
 
 
 SnapshotHook = Callable[[int, float, np.ndarray, np.ndarray], None]

@@ -1,5 +1,7 @@
 """Writes the DOP853 stage loops of ``_kernels.py`` as straight-line code.
 
+(It also writes ``_borrowed_state``, which must name every field of ``State``.)
+
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
 previous stages. Written as loops over the tableau, a window of a dozen balls spends
 its time in loop overhead; written out with the coefficients as literals, each stage
@@ -12,6 +14,7 @@ between the markers below from scipy's DOP853 tableau::
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -55,7 +58,13 @@ _PROLOGUE = [
 ]
 
 
-def generate() -> str:
+def _state_fields(text: str) -> list[str]:
+    block = text[text.index("State = namedtuple("):]
+    block = block[block.index("[") : block.index("]")]
+    return re.findall(r'"(\w+)"', block)
+
+
+def generate(text: str) -> str:
     A, B = dop.A, dop.B
     ns, nse = dop.N_STAGES, dop.N_STAGES_EXTENDED
     lines = [
@@ -126,6 +135,16 @@ def generate() -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"        FX[{3 + r}, p] = {_combo(dop.D[r], 'KX', 'h')}")
         lines.append(f"        FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
+    lines += [
+        "",
+        "",
+        "@nb.njit(cache=True)",
+        "def _borrowed_state(S):",
+        '    """The state with every array borrowed (see _borrowed)."""',
+        "    return State(",
+        *[f"        _borrowed(S.{f})," for f in _state_fields(text)],
+        "    )",
+    ]
     lines.append(END)
     return "\n".join(lines) + "\n"
 
@@ -138,7 +157,7 @@ def _splice(text: str, section: str) -> str:
 
 def main(argv: list[str]) -> int:
     text = TARGET.read_text()
-    new = _splice(text, generate())
+    new = _splice(text, generate(text))
     if "--check" in argv:
         if new != text:
             print(f"{TARGET} is out of date: run python -m chainrun.solver._codegen")

@@ -107,7 +107,7 @@ def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
         sep_t=np.full(n, np.nan), sep_v=np.full(n, np.nan),
         bmap=np.full(n, -1, np.int64),
         cst=cst, lvl=np.zeros(ncont), stamp=np.zeros(ncont, np.int64),
-        clo=clo, chi=chi, coff=np.zeros(ccap, np.int64),
+        clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
         **_alloc_window(min(n, _INITIAL_WINDOW)),
         hp_t=np.zeros(n), hp_j=np.zeros(n, np.int64), hp_s=np.zeros(n, np.int64),
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
