@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
+import time
 from pathlib import Path
 
 import click
@@ -10,15 +12,28 @@ import click
 from chainrun.cli.common import EXIT_BAD_INPUT, EXIT_FAILED_RUNS, fail
 from chainrun.errors import ChainrunError, ConfigError
 
+EXIT_INTERRUPTED = 130
+
 
 @click.command()
 @click.argument("config", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--outdir", type=click.Path(file_okay=False, path_type=Path),
               help="Output folder [default: results/<name>/].")
-@click.option("--force", is_flag=True, help="Replace results already in the output folder.")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Runs of a sweep computed at once, in separate processes.")
-def simulate(config: Path, outdir: Path | None, force: bool, jobs: int):
+@click.option("--force", is_flag=True,
+              help="Replace run files computed from another config. Runs whose file "
+                   "matches the config are skipped, with or without --force.")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+              help="Runs computed at once on this machine [default: 1, in this "
+                   "process]; more start a local Dask cluster (local processes "
+                   "without Dask).")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="Run on an existing Dask cluster, e.g. tcp://10.0.0.5:8786 "
+                   "[default: $DASK_SCHEDULER_ADDRESS if set and --jobs is not given].")
+@click.option("--scheduler-file", type=click.Path(dir_okay=False, path_type=Path),
+              help="Run on the Dask cluster described by this file "
+                   "(dask scheduler --scheduler-file).")
+def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
+             scheduler: str | None, scheduler_file: Path | None):
     """Run the experiment in CONFIG (YAML or TOML) and write HDF5 run files.
 
     Each run goes to OUTDIR/<run_id>.h5 (H5MD 1.1: snapshots, contact events,
@@ -39,10 +54,17 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int):
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
     rtol (accuracy, default 1e-12), max_events.
 
+    Sweeps resume: a run whose file already holds the same config is skipped, so
+    after an interruption the same command computes only what is missing. A file
+    of another config stops the command unless --force is given. A failed run does
+    not stop the others; all failures are listed at the end (exit status 1).
+
     \b
     Examples:
       chainrun simulate configs/table1.toml
-      chainrun simulate sweep.toml --jobs 2 --force
+      chainrun simulate sweep.toml --jobs 4
+      chainrun simulate sweep.toml --force          # the config changed
+      chainrun simulate sweep.toml --scheduler tcp://10.0.0.5:8786
     """
     from chainrun.config import load_experiment
     from chainrun.runner import simulate_experiment, velocity_table
@@ -54,63 +76,101 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int):
             click.echo(f"{exc.source}: {problem}", err=True)
         sys.exit(EXIT_BAD_INPUT)
     outdir = outdir if outdir is not None else Path("results") / experiment.name
-    runs = experiment.runs()
-    click.echo(f"{experiment.name}: {len(runs)} run{'s' * (len(runs) != 1)} -> {outdir}/",
-               err=True)
-    progress = _Progress(runs) if jobs == 1 else None
+    total = len(experiment.runs())
+    click.echo(f"{experiment.name}: {total} run{'s' * (total != 1)} -> {outdir}/", err=True)
+    bar = _SweepBar()
+
+    def run_done(run):
+        bar.clear()
+        click.echo(run.line())
+
     try:
-        summaries = simulate_experiment(
-            experiment, outdir, force=force, jobs=jobs,
-            on_progress=progress.update if progress else None,
-            on_run_done=lambda s: (progress and progress.close(), click.echo(s.line())),
-        )
+        try:
+            result = simulate_experiment(
+                experiment, outdir, force=force, jobs=jobs, scheduler=scheduler,
+                scheduler_file=scheduler_file, on_progress=bar.run_time,
+                on_run_done=run_done, on_update=bar.update,
+            )
+        finally:
+            bar.clear()
     except ChainrunError as exc:
         fail(str(exc))
     except KeyboardInterrupt:
-        fail("interrupted; runs not finished were not written", 130)
-    table = velocity_table(summaries)
+        fail("interrupted; finished runs are kept: the same command resumes the sweep",
+             EXIT_INTERRUPTED)
+    table = velocity_table(result.summaries)
     if table:
         click.echo("\nfinal velocities")
         click.echo(table)
-    failed = [s for s in summaries if not s.ok]
-    for s in failed:
-        click.echo(f"chainrun: run {s.run_id} failed: {s.message}", err=True)
-    total = sum(s.wall_time for s in summaries)
-    click.echo(f"{len(summaries) - len(failed)} of {len(summaries)} runs finished in "
-               f"{total:.2f} s of solver time; index: {outdir / 'index.h5'}", err=True)
-    if failed:
+    for run in result.failures:
+        click.echo(f"chainrun: run {run.run_id} failed: {run.message}", err=True)
+    computed = [r for r in result.computed if r.ok]
+    skipped = [r for r in result.skipped if r.ok]
+    solver_time = sum(r.wall_time for r in computed)
+    where = f" {result.workers}" if result.workers else ""
+    click.echo(f"{total} runs: {len(computed)} computed{where} ({solver_time:.2f} s of "
+               f"solver time), {len(skipped)} skipped, {len(result.failures)} failed; "
+               f"index: {outdir / result.index.name}", err=True)
+    if result.failures:
         sys.exit(EXIT_FAILED_RUNS)
 
 
-class _Progress:
-    """A progress bar over simulated time, per run, only on a terminal.
+class _SweepBar:
+    """One progress line over the sweep on stderr, drawn only on a terminal.
 
-    Between output times the bar follows the simulated time up to the last snapshot
-    time (or t_end); past it, the run is finishing towards its terminal state.
+    ``[#####.....] 12/40 done 8, running 2, failed 1, skipped 3; 0:42 k=2 t = 12.5``
+
+    Redrawn at most ten times a second, and only when the line changes.
     """
 
-    def __init__(self, runs):
-        self.span = {r.run_id: (r.t_end or (r.times[-1] if len(r.times) else 0.0)) for r in runs}
+    WIDTH = 20
+
+    def __init__(self):
         self.enabled = sys.stderr.isatty()
-        self.bar = None
-        self.run_id = None
+        self.counts = None
+        self.current = ""
+        self.shown = False
+        self.drawn_at = 0.0
+        self.line = ""
+        self.started = time.monotonic()
 
-    def update(self, run_id: str, t: float):
-        if not self.enabled:
+    def update(self, counts) -> None:
+        self.counts = counts
+        if not counts.current:
+            self.current = ""
+        self.draw()
+
+    def run_time(self, run_id: str, t: float) -> None:
+        """Simulated time of a run computed in this process."""
+        self.current = f"{run_id} t = {t:.4g}"
+        self.draw()
+
+    def draw(self) -> None:
+        if not self.enabled or self.counts is None:
             return
-        if run_id != self.run_id:
-            self.close()
-            self.run_id = run_id
-            self.bar = click.progressbar(length=1000, label=run_id, file=sys.stderr,
-                                         show_eta=False)
-            self.bar.__enter__()
-        span = self.span.get(run_id) or 0.0
-        pos = 1000 if span <= 0 else min(1000, int(1000 * t / span))
-        self.bar.update(pos - self.bar.pos)
+        now = time.monotonic()
+        if self.shown and now - self.drawn_at < 0.1:
+            return
+        self.drawn_at = now
+        c = self.counts
+        filled = self.WIDTH * c.finished // max(c.total, 1)
+        minutes, seconds = divmod(int(now - self.started), 60)
+        line = (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] {c.finished}/{c.total} "
+                f"done {c.done}, running {c.running}, failed {c.failed}, "
+                f"skipped {c.skipped}; {minutes}:{seconds:02d}")
+        current = self.current or c.current
+        if current:
+            line += f" {current}"
+        line = line[: shutil.get_terminal_size().columns - 1]
+        if self.shown and line == self.line:
+            return
+        self.line = line
+        sys.stderr.write("\r\x1b[K" + line)
+        sys.stderr.flush()
+        self.shown = True
 
-    def close(self):
-        if self.bar is not None:
-            self.bar.__exit__(None, None, None)
-            self.bar = None
-            self.run_id = None
-
+    def clear(self) -> None:
+        if self.shown:
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
+            self.shown = False

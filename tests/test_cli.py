@@ -1,0 +1,125 @@
+"""End-to-end tests of ``chainrun simulate``: the real command in a temporary folder."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+import chainrun
+import chainrun.runner as runner
+from chainrun.cli import main
+from chainrun.store import read_index
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+
+#: Table 1 of the paper: final velocities of five Hertz spheres, K = 1..4 (columns).
+TABLE1 = {
+    1: ["-0.0711", "-0.0303", "-0.0145", "0.1270", "0.9888"],
+    2: ["-0.1126", "-0.0420", "0.2145", "0.8004", "1.140"],
+    3: ["-0.1397", "0.1996", "0.7855", "1.042", "1.113"],
+    4: ["0.0112", "0.8729", "1.015", "1.030", "1.071"],
+}
+
+
+@pytest.fixture
+def cli(tmp_path, monkeypatch):
+    """Invoke ``chainrun ARGS`` in an empty temporary working folder."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv(runner.SCHEDULER_ENV, raising=False)
+
+    def invoke(*args):
+        return CliRunner().invoke(main, [str(a) for a in args])
+    return invoke
+
+
+def printed_table(stdout: str) -> dict[str, list[float]]:
+    """The 'final velocities' table of the output, by column header."""
+    lines = stdout.split("final velocities\n", 1)[1].strip().splitlines()
+    head = lines[0].split()
+    rows = [line.split() for line in lines[1:]]
+    return {name: [float(r[c]) for r in rows] for c, name in enumerate(head) if c}
+
+
+def test_table1_prints_the_papers_numbers(cli, tmp_path):
+    result = cli("simulate", CONFIGS / "table1.toml")
+    assert result.exit_code == 0, result.output
+    table = printed_table(result.stdout)
+    for k, column in TABLE1.items():
+        for n, printed in enumerate(column):
+            decimals = len(printed.split(".")[1])
+            # The paper rounds to its printed digits, we to 4 decimals.
+            tolerance = 0.5 * 10.0**-decimals + 0.5e-4
+            assert table[f"k={k}"][n] == pytest.approx(float(printed), abs=tolerance), (k, n + 1)
+    rows = read_index(tmp_path / "results" / "table1" / "index.h5")
+    assert [r["run_id"] for r in rows] == ["k=1", "k=2", "k=3", "k=4"]
+    assert all(r["outcome"] == "terminal" for r in rows)
+    assert "4 computed in this process" in result.stderr
+
+
+def test_a_bad_config_lists_every_problem_and_writes_nothing(cli, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\n[chain]\nn = 0\nk = 1\nalpha = "x"\ncolour = 3\n')
+    result = cli("simulate", bad)
+    assert result.exit_code == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 3
+    assert all(line.startswith(f"{bad}: chain.") for line in lines)
+    assert {line.split(": ")[1] for line in lines} == {"chain.n", "chain.alpha", "chain.colour"}
+    assert result.stdout == ""
+    assert not (tmp_path / "results").exists()
+
+
+def test_it_refuses_to_overwrite_files_of_another_config(cli, tmp_path):
+    config = tmp_path / "cradle.toml"
+    config.write_text('name = "cradle"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n')
+    assert cli("simulate", config).exit_code == 0
+    run = tmp_path / "results" / "cradle" / "run.h5"
+    before = run.read_bytes()
+
+    config.write_text('name = "cradle"\n[chain]\nn = 5\nk = 2\nalpha = 1.5\n')
+    result = cli("simulate", config)
+    assert result.exit_code == 2
+    error = result.stderr.strip().splitlines()[-1]
+    assert error.startswith("chainrun: error: ") and "run.h5" in error and "--force" in error
+    assert run.read_bytes() == before
+
+    result = cli("simulate", config, "--force")
+    assert result.exit_code == 0, result.output
+    assert run.read_bytes() != before
+    assert read_index(run.parent / "index.h5")[0]["k"] == 2
+
+
+def test_version(cli):
+    result = cli("--version")
+    assert result.exit_code == 0
+    assert result.output.strip() == f"chainrun, version {chainrun.__version__}"
+
+
+@pytest.mark.parametrize("args", [["--help"], ["simulate", "--help"]])
+def test_help_has_examples(cli, args):
+    result = cli(*args)
+    assert result.exit_code == 0
+    examples = result.output.split("Examples:\n", 1)[1]
+    assert re.search(r"^\s+chainrun simulate \S+", examples, re.MULTILINE)
+
+
+def test_help_explains_resumption_and_clusters(cli):
+    text = " ".join(cli("simulate", "--help").output.split())
+    for needed in ("--scheduler ADDRESS", "--scheduler-file", "DASK_SCHEDULER_ADDRESS",
+                   "--jobs", "skipped", "--force"):
+        assert needed in text, needed
+
+
+def test_an_unreachable_scheduler_is_one_line(cli, tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(runner, "CONNECT_TIMEOUT", 1.0)
+    config = tmp_path / "cradle.toml"
+    config.write_text('name = "cradle"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n')
+    result = cli("simulate", config, "--scheduler", "tcp://127.0.0.1:9")
+    assert result.exit_code == 2
+    error = result.stderr.strip().splitlines()[-1]
+    assert error.startswith("chainrun: error: cannot connect to Dask at tcp://127.0.0.1:9")
+    assert "Traceback" not in result.output
