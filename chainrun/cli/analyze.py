@@ -1,0 +1,48 @@
+"""``chainrun analyze``: turn run files into analysis files, one per artefact of the paper."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from chainrun.cli.common import fail
+from chainrun.errors import ChainrunError
+
+
+@click.command()
+@click.argument("names", nargs=-1)
+@click.option("--all", "all_", is_flag=True, help="Every artefact, in the registry's order.")
+@click.option("-r", "--results", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("results"), show_default=True,
+              help="Results folder: runs are read from RESULTS/runs/<experiment>/, analysis "
+                   "files written to RESULTS/analysis/<name>.h5.")
+def analyze(names: tuple[str, ...], all_: bool, results: Path):
+    """Derive the quantities of the paper's artefacts NAMES from their run files.
+
+    Each artefact (a figure, a table, or a set of printed numbers; `chainrun plot
+    --list` shows them) reads the runs of its experiments, simulated beforehand with
+    `chainrun simulate configs/<experiment>.toml -o RESULTS/runs/<experiment>`, and
+    the analysis files it needs. It writes RESULTS/analysis/<name>.h5: the arrays its
+    figure draws, the named values the comparison table uses, the settings that
+    produced them and the sha256 of every file read.
+
+    \b
+    Examples:
+      chainrun analyze fig05
+      chainrun analyze sec5a fig10 fig11
+      chainrun analyze --all              # what `make figures` does, in order
+    """
+    from chainrun import artefacts
+    from chainrun.analysis import analyze as analyze_artefact
+
+    if all_:
+        names = tuple(a.name for a in artefacts.ARTEFACTS)
+    if not names:
+        fail("name at least one artefact, or give --all (see `chainrun plot --list`)")
+    for name in names:
+        try:
+            path = analyze_artefact(name, results=results)
+        except ChainrunError as exc:
+            fail(str(exc))
+        click.echo(f"{name}: {path}")

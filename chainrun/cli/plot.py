@@ -1,0 +1,73 @@
+"""``chainrun plot``: draw figures and tables from analysis files, or list the artefacts."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from chainrun.cli.common import fail
+from chainrun.errors import ChainrunError
+
+
+@click.command()
+@click.argument("names", nargs=-1)
+@click.option("--all", "all_", is_flag=True,
+              help="Every artefact with outputs, in the registry's order.")
+@click.option("--list", "list_", is_flag=True,
+              help="List the artefacts (name, kind, inputs, outputs) and exit.")
+@click.option("--format", "format_", type=click.Choice(["text", "json", "make"]),
+              default="text", show_default=True,
+              help="Format of --list; `make` writes the rules the Makefile includes.")
+@click.option("-r", "--results", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("results"), show_default=True,
+              help="Results folder: analysis files are read from RESULTS/analysis/, outputs "
+                   "written under RESULTS/.")
+def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results: Path):
+    """Draw the figures and tables NAMES from their analysis files.
+
+    Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
+    RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
+    RESULTS/paper-comparison.csv and .md. Nothing is computed here: each output is
+    drawn from RESULTS/analysis/<name>.h5 (`chainrun analyze`). The same inputs give
+    the same bytes.
+
+    \b
+    Examples:
+      chainrun plot --list
+      chainrun plot fig05
+      chainrun plot --all
+      chainrun plot --list --format make > results/artefacts.mk
+    """
+    from chainrun import artefacts
+
+    if list_:
+        if format_ == "make":
+            click.echo(artefacts.make_rules(results=str(results)), nl=False)
+        elif format_ == "json":
+            rows = [dict(name=a.name, kind=a.kind, title=a.title,
+                         experiments=list(a.experiments), needs=list(a.needs),
+                         outputs=[str(p) for p in artefacts.output_paths(a, results)])
+                    for a in artefacts.ARTEFACTS]
+            click.echo(json.dumps(rows, indent=2))
+        else:
+            for a in artefacts.ARTEFACTS:
+                outputs = ", ".join(str(p) for p in artefacts.output_paths(a, results))
+                click.echo(f"{a.name:17s} {a.kind:10s} {a.title}")
+                inputs = ", ".join([f"configs/{e}.toml" for e in a.experiments] + list(a.needs))
+                click.echo(f"{'':28s}from: {inputs}")
+                click.echo(f"{'':28s}to:   {outputs or artefacts.analysis_path(a.name, results)}")
+        return
+    from chainrun.plotting import render
+
+    if all_:
+        names = tuple(a.name for a in artefacts.ARTEFACTS if a.plot is not None)
+    if not names:
+        fail("name at least one artefact, or give --all or --list")
+    for name in names:
+        try:
+            paths = render(name, results=results)
+        except ChainrunError as exc:
+            fail(str(exc))
+        click.echo(f"{name}: {', '.join(str(p) for p in paths)}")

@@ -1,0 +1,115 @@
+"""Plotting: figures and tables drawn from analysis files, and nothing computed anew.
+
+This package owns the look of every output. ``render(name)`` reads the artefact's analysis
+file (through ``chainrun.store``), asks the artefact's module (``chainrun.plotting.figNN``,
+``table1``, ``comparison``) to draw it, and writes the outputs named in
+``chainrun.artefacts``:
+
+- a figure module has ``draw(data) -> matplotlib.figure.Figure``; the figure is saved as
+  PNG and PDF with the shipped style ``chainrun.mplstyle`` and fixed metadata, so a
+  rebuild gives the same bytes;
+- a table module has ``write(data) -> dict`` from file suffix (".md", ".csv") to text.
+
+pyplot is never used: figures are plain ``Figure`` objects, so no GUI backend or global
+state is involved.
+"""
+
+from __future__ import annotations
+
+import importlib
+from contextlib import contextmanager
+from pathlib import Path
+
+from chainrun import artefacts
+from chainrun.errors import ChainrunError
+from chainrun.store import AnalysisData, read_analysis
+
+__all__ = ["STYLE", "draw", "render", "style"]
+
+#: The one matplotlib style of chainrun, shipped in the package.
+STYLE = Path(__file__).with_name("chainrun.mplstyle")
+
+#: Metadata written into every file: nothing that changes from one build to the next.
+PNG_METADATA = {"Software": None}
+PDF_METADATA = {"Creator": "chainrun", "Producer": None, "CreationDate": None,
+                "ModDate": None}
+
+
+@contextmanager
+def style():
+    """Use chainrun's style (and only it) inside the block."""
+    import matplotlib
+    import matplotlib.style
+
+    with matplotlib.rc_context():
+        matplotlib.rcdefaults()
+        matplotlib.style.use(STYLE)
+        yield
+
+
+def _module(artefact: artefacts.Artefact):
+    if artefact.plot is None:
+        raise ChainrunError(f"{artefact.name} has no figure or table of its own (it only "
+                            "feeds the comparison); see `chainrun plot --list`")
+    return importlib.import_module(f"chainrun.plotting.{artefact.plot}")
+
+
+def draw(name: str, data: AnalysisData):
+    """The matplotlib Figure of figure artefact ``name``, drawn from ``data``.
+
+    Must be called inside ``style()`` for the figure to look as saved.
+    """
+    return _module(artefacts.get(name)).draw(data)
+
+
+def render(name: str, *, results="results") -> list[Path]:
+    """Draw artefact ``name`` from its analysis file and write its outputs.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Raises
+    ------
+    ChainrunError
+        If the artefact is unknown, has no outputs, or its analysis file is missing.
+    """
+    try:
+        artefact = artefacts.get(name)
+    except KeyError as exc:
+        raise ChainrunError(exc.args[0]) from None
+    module = _module(artefact)
+    source = artefacts.analysis_path(name, results)
+    if not source.exists():
+        raise ChainrunError(f"{source}: missing; run `chainrun analyze {name}` first")
+    data = read_analysis(source)
+    outputs = artefacts.output_paths(artefact, results)
+    for path in outputs:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    if artefact.kind == "figure":
+        with style():
+            figure = module.draw(data)
+            for path in outputs:
+                metadata = PNG_METADATA if path.suffix == ".png" else PDF_METADATA
+                _atomic(path, lambda tmp: figure.savefig(tmp, format=path.suffix[1:],
+                                                         metadata=metadata))
+    else:
+        texts = module.write(data)
+        for path in outputs:
+            text = texts[path.suffix]
+            _atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    return outputs
+
+
+def _atomic(path: Path, write) -> None:
+    """Write through a temporary name beside ``path``, then rename over it."""
+    import os
+
+    temp = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    try:
+        write(temp)
+        os.replace(temp, path)
+    finally:
+        if temp.exists():
+            temp.unlink()
