@@ -49,7 +49,8 @@ def make_solution(spec: RunSpec, seed=0, events=5, keep_snapshots=True) -> Solut
     v = rng.normal(0, 0.5, (len(times), n))
     sep_t = np.where(np.arange(n) % 3 == 0, np.nan, rng.random(n) * 10)
     diag = Diagnostics(steps=1234, rejected_steps=7, events=events, momentum_error=3e-16,
-                       energy_error=-2e-15, wall_time=0.25, max_window=5, rtol=spec.rtol,
+                       energy_error=-2e-15, energy_correction=4e-14, wall_time=0.25,
+                       max_window=5, rtol=spec.rtol,
                        velocity_floor=1e-12)
     return Solution(
         n=n, k=spec.k, alpha=spec.alpha, outcome=Outcome.TERMINAL,
@@ -198,7 +199,7 @@ def test_results_events_diagnostics(run):
         d = f["diagnostics"].attrs
         assert dict(d) == pytest.approx({
             "steps": 1234, "rejected_steps": 7, "events": 5, "momentum_error": 3e-16,
-            "energy_error": -2e-15, "wall_time": 0.25, "max_window": 5, "rtol": 1e-12,
+            "energy_error": -2e-15, "energy_correction": 4e-14, "wall_time": 0.25, "max_window": 5, "rtol": 1e-12,
             "velocity_floor": 1e-12,
         })
 

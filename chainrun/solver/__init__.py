@@ -70,7 +70,10 @@ class Diagnostics:
     """Cost and accuracy of one run.
 
     momentum_error is absolute (the initial momentum is K); energy_error is relative to
-    the initial energy K/2.
+    the initial energy K/2. Each cluster's internal energy is projected back to its
+    conserved value at every change of structure (see ``_kernels._project_energy``);
+    energy_correction is the sum of those corrections relative to K/2, the honest
+    measure of the integration error that the projection removes.
     """
 
     steps: int
@@ -78,6 +81,7 @@ class Diagnostics:
     events: int
     momentum_error: float
     energy_error: float
+    energy_correction: float
     wall_time: float
     max_window: int
     rtol: float

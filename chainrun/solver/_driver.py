@@ -206,6 +206,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         events=int(event_time.size),
         momentum_error=p_err,
         energy_error=abs(e1 - e0) / e0,
+        energy_correction=float(S.fs[K.F_EPROJ]) / e0,
         wall_time=wall,
         max_window=int(S.ints[K.I_MAXWIN]),
         rtol=float(rtol),
