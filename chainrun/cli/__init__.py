@@ -9,6 +9,8 @@ from __future__ import annotations
 import click
 
 from chainrun import __version__
+from chainrun.cli.analyze import analyze
+from chainrun.cli.plot import plot
 from chainrun.cli.simulate import simulate
 
 
@@ -27,7 +29,11 @@ def main():
       chainrun simulate configs/table1.toml          # the paper's Table 1
       chainrun simulate my.yaml -o results/mine --jobs 2
       chainrun simulate --help                       # the experiment file format
+      chainrun plot --list                           # the paper's figures and tables
+      chainrun analyze fig05 && chainrun plot fig05  # one figure from its runs
     """
 
 
 main.add_command(simulate)
+main.add_command(analyze)
+main.add_command(plot)
