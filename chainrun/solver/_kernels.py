@@ -1259,11 +1259,14 @@ def _due(S, j):
     of their level, possibly just past it, where no crossing will ever be seen.
     """
     t = S.fs[F_T]
-    xl = S.bx[j] + S.bv[j] * (t - S.bt[j])
-    xr = S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1])
+    dl = S.bv[j] * (t - S.bt[j])
+    dr = S.bv[j + 1] * (t - S.bt[j + 1])
+    xl = S.bx[j] + dl
+    xr = S.bx[j + 1] + dr
     c = xl - xr
     w = S.bv[j] - S.bv[j + 1]
-    r = _rounding(abs(xl) + abs(xr))
+    # the rounding of a free ball's x + v (t - tref) comes from its terms, not its value
+    r = _rounding(abs(xl) + abs(xr) + abs(dl) + abs(dr))
     st = S.cst[j]
     if st == ACTIVE:
         if (c <= r and w < 0.0) or c < -r:
