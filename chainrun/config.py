@@ -1,7 +1,30 @@
 """Experiment files: the one schema for YAML and TOML, validation, and sweep expansion.
 
 This module owns turning config text into frozen, validated objects. Nothing else in
-chainrun parses experiment files.
+chainrun parses experiment files, and the module reads nothing but the file it is given.
+
+The schema (TOML shown; YAML has the same structure)::
+
+    name = "table1"                  # the output folder: 1-100 of [A-Za-z0-9._-], no leading
+                                     # or trailing ".", not a reserved device name (CON, NUL...)
+    description = "..."              # optional
+    [chain]
+    n = 5                            # balls, 1 <= n < 2**63 (memory is checked when run)
+    k = 1                            # impacting balls at velocity 1, 1 <= k <= n
+    alpha = 1.5                      # contact exponent, >= 1 (1 linear, 1.5 Hertz)
+    [output]                         # optional
+    times = [0.0, 5.0]               # or {start = 0, stop = 60, step = 5}, stop inclusive;
+                                     # none after solver.t_end
+    [solver]                         # optional
+    t_end = 100.0                    # default: run to the terminal state
+    rtol = 1e-12                     # in [1e-15, 1e-3]
+    max_events = 1000000             # default: no limit
+    [sweep]                          # optional: the cartesian product of the lists
+    "chain.k" = [1, 2, 3, 4]         # at most MAX_RUNS runs, MAX_SNAPSHOTS snapshots in all
+
+Every problem in a file is reported at once, one line each naming the dotted key, as a
+``chainrun.errors.ConfigError``; ``load_experiment`` and ``parse_experiment`` raise
+nothing else, whatever the text (``tests/test_fuzz.py`` checks it).
 """
 
 from __future__ import annotations
@@ -13,6 +36,8 @@ import json
 import math
 import os
 import re
+import reprlib
+import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -81,13 +106,11 @@ class RunSpec:
     source_text: str = ""
 
 
-# ---------------------------------------------------------------------------------------
-# Everything below is the experiment-file schema and its loader.
-# ---------------------------------------------------------------------------------------
-
 __all__ = [
     "Chain",
     "Experiment",
+    "MAX_RUNS",
+    "MAX_SNAPSHOTS",
     "Output",
     "RunSpec",
     "SWEEPABLE_KEYS",
@@ -111,8 +134,16 @@ SWEEPABLE_KEYS: dict[str, type] = {
 
 #: Most snapshot times a ``{start, stop, step}`` range may expand to.
 MAX_RANGE_TIMES = 10_000_000
+#: Most runs a sweep may have.
+MAX_RUNS = 10_000
+#: Most snapshots (runs times snapshot times) an experiment may ask for in all.
+MAX_SNAPSHOTS = 10_000_000
+#: Largest integer a config may hold: run files store integers as int64.
+MAX_INT = 2**63 - 1
 
 _NAME_RE = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,99}")
+#: Device names Windows reserves in every folder, with or without an extension.
+_RESERVED_RE = re.compile(r"(CON|PRN|AUX|NUL|COM[0-9]|LPT[0-9])(\..*)?", re.IGNORECASE)
 _ERROR_TYPE = "chainrun"  # pydantic error type of the problems raised in this module
 
 
@@ -150,9 +181,45 @@ def _fail(issues: list[_Issue]) -> PydanticCustomError:
     )
 
 
+_REPR = reprlib.Repr()  # bounded: YAML aliases can build huge or cyclic structures
+_REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, 60, 60
+_REPR.maxlist = _REPR.maxtuple = _REPR.maxset = _REPR.maxdict = 8
+
+
 def _show(value: Any) -> str:
-    """A short one-line rendering of a user's value for a message."""
-    text = repr(value)
+    """A short one-line rendering of a user's value for a message.
+
+    Bounded in time and length whatever the value: containers are shown a few
+    levels and items deep, and integers too long to print by their size.
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 190:
+        digits = int((value.bit_length() - 1) * math.log10(2)) + 1
+        text = f"{'-' if value < 0 else ''}<an integer of about {digits} digits>"
+    elif isinstance(value, (str, bytes, int, float, type(None))):
+        text = repr(value)
+    else:
+        try:
+            text = _REPR.repr(value)
+        except (RecursionError, ValueError):
+            text = f"<{type(value).__name__}>"
+    text = _one_line(text)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+#: Characters that end a line for ``str.splitlines``, and the other control characters.
+_BREAKS = {c: repr(chr(c))[1:-1] for c in [*range(0x20), *range(0x7F, 0xA0), 0x2028, 0x2029]}
+
+
+def _one_line(text: str) -> str:
+    """``text`` with line breaks and control characters written as escapes."""
+    return text.translate(_BREAKS)
+
+
+def _key_text(key: Any) -> str:
+    """A user's key for a message: one line, at most 60 characters."""
+    if not isinstance(key, str):
+        return _show(key)
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in key[:200])
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -171,16 +238,22 @@ def _suggest(word: str, choices: list[str]) -> str:
 
 
 def _check_int(value: Any) -> int:
-    """``value`` if it is a true integer (not a bool, not 2.0 or "3"), else an error."""
+    """``value`` if it is a true integer (not a bool, not 2.0 or "3") that fits in an
+    int64, else an error."""
     if isinstance(value, int) and not isinstance(value, bool):
-        return value
+        if -MAX_INT - 1 <= value <= MAX_INT:
+            return value
+        raise _fail([_Issue(f"must be a 64-bit integer (at most 2**63 - 1), got {_show(value)}")])
     raise _fail([_Issue(f"expected an integer, got {_show(value)}")])
 
 
 def _check_float(value: Any) -> float:
     """``value`` as a float if it is a finite int or float (not a bool), else an error."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:  # an integer beyond 1.8e308
+            raise _fail([_Issue(f"must be finite, got {_show(value)}")]) from None
         if math.isfinite(x):
             return x
         raise _fail([_Issue(f"must be finite, got {_show(value)}")])
@@ -240,7 +313,7 @@ def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Is
     fields = ["start", "stop", "step"]
     for key in table:
         if key not in fields:
-            issues.append(_Issue(f"unknown key{_suggest(str(key), fields)}", (str(key),)))
+            issues.append(_Issue(f"unknown key{_suggest(str(key), fields)}", (_key_text(key),)))
     got: dict[str, float] = {}
     for key in fields:
         if key not in table:
@@ -261,7 +334,9 @@ def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Is
     if issues:
         return (), issues
     start, stop, step = got["start"], got["stop"], got["step"]
-    m = (stop - start) / step
+    m = (stop - start) / step  # inf when step is tiny (1e-308)
+    if not m < MAX_RANGE_TIMES:
+        return (), [_Issue(f"a range of {m + 1:.4g} times is too many (at most {MAX_RANGE_TIMES})")]
     steps = round(m) if abs(m - round(m)) <= 1e-9 * max(1.0, m) else math.floor(m)
     if steps + 1 > MAX_RANGE_TIMES:
         return (), [_Issue(f"a range of {steps + 1} times is too many (at most {MAX_RANGE_TIMES})")]
@@ -327,11 +402,15 @@ class SolverSettings(BaseModel):
 
 
 def _flatten_sweep(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
-    """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``."""
+    """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``.
+
+    Only one level is unfolded (sweepable keys have two parts), so a deep or cyclic
+    table (YAML aliases) is reported as an unknown key rather than recursed into.
+    """
     items: list[tuple[str, Any]] = []
     for key, value in table.items():
-        dotted = f"{prefix}{key}"
-        if isinstance(value, Mapping) and dotted not in SWEEPABLE_KEYS:
+        dotted = f"{prefix}{_key_text(key)}"
+        if isinstance(value, Mapping) and not prefix and dotted not in SWEEPABLE_KEYS:
             items.extend(_flatten_sweep(value, dotted + "."))
         else:
             items.append((dotted, value))
@@ -351,8 +430,12 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
         if key not in SWEEPABLE_KEYS:
             issues.append(_Issue(f"unknown key '{key}'{_suggest(key, list(SWEEPABLE_KEYS))}"))
             continue
-        named.add(key)
         sub = (key,)
+        if key in named:  # "chain.k" and chain = {k = ...} in one table
+            issues.append(_Issue("given twice", sub))
+            valid.pop(key, None)
+            continue
+        named.add(key)
         if not isinstance(values, (list, tuple)):
             issues.append(_Issue(f"expected a list of values, got {_show(values)}", sub))
             continue
@@ -395,6 +478,20 @@ def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
         data[table] = {**data[table], key: value}
 
 
+def _canonical_json(config: dict[str, Any], times_json: str) -> str:
+    """``json.dumps(config, sort_keys=True, separators=(",", ":"))``, with the (long) list
+    ``config["output"]["times"]`` given already serialised as ``times_json``.
+
+    A quote inside a JSON string is always escaped, so ``"output":{"times":[]}`` can
+    only occur as the real key.
+    """
+    stub = {**config, "output": {**config["output"], "times": []}}
+    text = json.dumps(stub, sort_keys=True, separators=(",", ":"))
+    marker = '"output":{"times":[]}'
+    assert text.count(marker) == 1
+    return text.replace(marker, f'"output":{{"times":{times_json}}}')
+
+
 class Experiment(BaseModel):
     """One experiment file: a chain, output times, solver settings and an optional sweep.
 
@@ -428,6 +525,10 @@ class Experiment(BaseModel):
                     )
                 ]
             )
+        if value.endswith("."):  # Windows drops it: "x." and "x" are one folder there
+            raise _fail([_Issue(f"must not end with '.', got {_show(value)}")])
+        if _RESERVED_RE.fullmatch(value):
+            raise _fail([_Issue(f"is a device name reserved on Windows, got {_show(value)}")])
         return value
 
     @field_validator("description", mode="before")
@@ -489,6 +590,8 @@ class Experiment(BaseModel):
         """
         keys = list(self.sweep)
         specs: list[RunSpec] = []
+        # The times are the same in every run: serialise them once for the hashes.
+        times_json = json.dumps(list(self.output.times), separators=(",", ":"))
         for combo in itertools.product(*(self.sweep[k] for k in keys)):
             overrides = dict(zip(keys, combo))
             data = self._base_data()
@@ -503,12 +606,14 @@ class Experiment(BaseModel):
                 solver = SolverSettings.model_validate(data["solver"])
             except ValidationError as exc:
                 problems += _translate(exc, ("solver",))
+            else:
+                problems += _times_after_t_end(self.output.times, solver.t_end)
             if problems:
-                label = _label(overrides)
-                lines = [f"sweep ({label}): {p.line()}" for p in problems]
+                label = f"sweep ({_label(overrides)}): " if overrides else ""
+                lines = [_one_line(f"{label}{p.line()}") for p in problems]
                 raise ConfigError(self._source or self.name, lines)
             config = {**data, "chain": chain.model_dump(), "solver": solver.model_dump()}
-            canonical = json.dumps(config, sort_keys=True, separators=(",", ":"))
+            canonical = _canonical_json(config, times_json)
             specs.append(
                 RunSpec(
                     experiment=self.name,
@@ -537,6 +642,14 @@ _MODEL_AT: dict[tuple[str, ...], type[BaseModel]] = {
 }
 
 
+def _times_after_t_end(times: tuple[float, ...], t_end: float | None) -> list[_Problem]:
+    """The problem of snapshot times after the stop time, which no run could take."""
+    if t_end is None or not times or times[-1] <= t_end:
+        return []
+    reason = f"{times[-1]!r} is after solver.t_end ({t_end!r})"
+    return [_Problem("output.times", reason, frozenset({"solver.t_end"}))]
+
+
 # --- pydantic errors -> one-line problems -------------------------------------------------
 
 
@@ -544,7 +657,7 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
     """Each pydantic error as a ``key: reason`` problem (never pydantic's own text)."""
     problems: list[_Problem] = []
     for error in exc.errors(include_url=False):
-        loc = prefix + tuple(str(part) for part in error["loc"])
+        loc = prefix + tuple(_key_text(part) for part in error["loc"])
         kind, ctx, value = error["type"], error.get("ctx") or {}, error.get("input")
         if kind == _ERROR_TYPE:
             for issue in ctx["issues"]:
@@ -597,10 +710,39 @@ def _validate(data: Any, source: str) -> Experiment:
     valid, named, sweep_issues = _check_sweep(data.get("sweep"))
     base = {key: value for key, value in data.items() if key != "sweep"}
     keys = list(valid)
-    combos = [dict(zip(keys, c)) for c in itertools.product(*(valid[k] for k in keys))]
 
-    base_lines: list[str] = []
-    combo_lines: list[str] = []
+    # The output table is the same in every run: validate it once, and reuse the model
+    # (a range can hold millions of times).
+    output: Output | None = Output()
+    if base.get("output") is not None:
+        try:
+            output = Output.model_validate(base["output"])
+            base["output"] = output
+        except ValidationError:
+            output = None  # reported with the whole file below
+
+    size_lines: list[str] = []
+    runs = math.prod(len(v) for v in valid.values())
+    snapshots = runs * max(1, len(output.times)) if output is not None else 0
+    if runs > MAX_RUNS:
+        size_lines.append(f"sweep: {runs} runs are too many (at most {MAX_RUNS})")
+    elif snapshots > MAX_SNAPSHOTS:
+        if keys:
+            size_lines.append(
+                f"sweep: {runs} runs of {len(output.times)} snapshot times make {snapshots} "
+                f"snapshots, too many (at most {MAX_SNAPSHOTS} in all)"
+            )
+        else:
+            size_lines.append(
+                f"output.times: {snapshots} times are too many (at most {MAX_SNAPSHOTS})"
+            )
+    product = itertools.product(*(valid[k] for k in keys))
+    if size_lines:  # check the rest of the file with the first combination only
+        product = itertools.islice(product, 1)
+    combos = [dict(zip(keys, c)) for c in product]
+
+    base_lines: dict[str, None] = {}  # ordered sets of lines
+    combo_lines: dict[str, None] = {}
     first: dict[str, Any] | None = None
     for overrides in combos:
         merged = dict(base)
@@ -621,6 +763,14 @@ def _validate(data: Any, source: str) -> Experiment:
                         model.model_validate(merged[table])
                     except ValidationError as exc:
                         problems += _translate(exc, (table,))
+        solver = merged.get("solver")
+        if output is not None and (solver is None or isinstance(solver, Mapping)):
+            try:
+                t_end = SolverSettings.model_validate(solver or {}).t_end
+            except ValidationError:
+                pass  # reported above
+            else:
+                problems += _times_after_t_end(output.times, t_end)
         if not problems:
             continue
         label = _label(overrides)
@@ -629,19 +779,17 @@ def _validate(data: Any, source: str) -> Experiment:
             if touched & (named - set(valid)):
                 continue  # a key whose sweep entry is itself broken: reported there
             if touched & named:
-                line = f"sweep ({label}): {problem.line()}"
-                target = combo_lines
+                combo_lines[f"sweep ({label}): {problem.line()}"] = None
             else:
-                line, target = problem.line(), base_lines
-            if line not in target:
-                target.append(line)
+                base_lines[problem.line()] = None
     lines = list(base_lines)
     lines += [
         (f"sweep.{i.sub[0]}: {i.reason}" if i.sub else f"sweep: {i.reason}") for i in sweep_issues
     ]
+    lines += size_lines
     lines += combo_lines
     if lines:
-        raise ConfigError(source, lines)
+        raise ConfigError(source, [_one_line(line) for line in lines])
     assert first is not None
     return Experiment.model_validate({**first, "sweep": data.get("sweep")})
 
@@ -671,6 +819,68 @@ def _syntax_line(exc: Exception, text: str, fmt: str) -> str:
     return f"line {mark.line + 1}: {reason} (column {mark.column + 1})"
 
 
+#: Deepest nesting of YAML flow collections read (PyYAML takes time quadratic in it).
+MAX_DEPTH = 100
+#: Most entries a YAML mapping may have after its merge keys (``<<``) are expanded.
+MAX_MERGED = 10_000
+
+
+def _too_deep(text: str) -> int:
+    """The line where ``[`` and ``{`` first nest more than ``MAX_DEPTH`` deep, else 0.
+
+    Brackets are counted wherever they are, quoted or not: an overestimate that only
+    a file with a hundred unclosed brackets in its strings could trip.
+    """
+    if text.count("[") + text.count("{") <= MAX_DEPTH:
+        return 0
+    depth = 0
+    line = 1
+    for char in text:
+        if char in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                return line
+        elif char in "]}":
+            depth = max(0, depth - 1)
+        elif char == "\n":
+            line += 1
+    return 0
+
+
+def _value_error(exc: Exception) -> str:
+    text = " ".join(str(exc).split())
+    if "integer string conversion" in text:
+        return f"an integer of more than {sys.get_int_max_str_digits()} digits"
+    return text or type(exc).__name__
+
+
+class _YamlLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` whose failures to convert a value name its place.
+
+    PyYAML converts ``2001-13-45`` (a date), ``!!int x`` or an integer of 5000 digits
+    with plain ``int()`` or ``datetime``; their ``ValueError`` carries no line. It also
+    expands merge keys without bound; this loader stops at ``MAX_MERGED`` entries.
+    """
+
+    def flatten_mapping(self, node):
+        # Merge keys ("<<: [*a, *a, ...]") copy entries: nested merges grow exponentially.
+        super().flatten_mapping(node)
+        if len(node.value) > MAX_MERGED:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"more than {MAX_MERGED} entries after merging '<<' keys",
+                node.start_mark,
+            )
+
+    def construct_object(self, node, deep=False):
+        try:
+            return super().construct_object(node, deep=deep)
+        except (ValueError, TypeError, OverflowError) as exc:
+            value = f"{_show(node.value)}: " if isinstance(node.value, str) else ""
+            raise yaml.constructor.ConstructorError(
+                None, None, f"cannot read {value}{_value_error(exc)}", node.start_mark
+            ) from None
+
+
 def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experiment:
     """The experiment described by ``text``.
 
@@ -696,11 +906,22 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
     fmt = {"yml": "yaml"}.get(fmt, fmt)
     if fmt not in ("toml", "yaml"):
         raise ConfigError(source, [f"unknown format {fmt!r} (expected 'toml' or 'yaml')"])
+    if fmt == "yaml":
+        deep = _too_deep(text)
+        if deep:
+            raise ConfigError(source, [f"line {deep}: nested more than {MAX_DEPTH} levels deep"])
     try:
-        data = tomllib.loads(text) if fmt == "toml" else yaml.safe_load(text)
+        data = tomllib.loads(text) if fmt == "toml" else yaml.load(text, Loader=_YamlLoader)
     except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
-        raise ConfigError(source, [_syntax_line(exc, text, fmt)]) from None
-    experiment = _validate(data, source)
+        raise ConfigError(source, [_one_line(_syntax_line(exc, text, fmt))]) from None
+    except RecursionError:
+        raise ConfigError(source, ["nested too deeply to read"]) from None
+    except ValueError as exc:  # tomllib converting a value, e.g. an integer of 5000 digits
+        raise ConfigError(source, [_one_line(f"cannot read a value ({_value_error(exc)})")]) from None
+    try:
+        experiment = _validate(data, source)
+    except RecursionError:  # YAML aliases can nest without end
+        raise ConfigError(source, ["nested too deeply to check"]) from None
     experiment._source_text = text  # private attributes are not frozen
     experiment._source = source
     return experiment
@@ -722,7 +943,7 @@ def load_experiment(path: str | os.PathLike[str]) -> Experiment:
             source, [f"unknown file type {suffix or '(none)'!r} (expected .toml, .yaml or .yml)"]
         )
     try:
-        with open(source, encoding="utf-8") as handle:
+        with open(source, encoding="utf-8-sig") as handle:  # a BOM (Windows editors) is dropped
             text = handle.read()
     except FileNotFoundError:
         raise ConfigError(source, ["no such file"]) from None

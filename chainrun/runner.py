@@ -179,9 +179,11 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     This is the task a worker executes: it needs only the spec and a folder it can
     write to (the same path on every machine of a cluster).
     """
+    from chainrun.limits import check_memory
     from chainrun.solver import simulate, velocity_floor
     from chainrun.store import RunWriter
 
+    check_memory(spec.n, len(spec.times))
     path = run_file(Path(outdir), spec)
     hook = None if on_progress is None else (lambda t: on_progress(spec.run_id, t))
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
@@ -537,6 +539,7 @@ def simulate_experiment(
     on_progress: ProgressHook | None = None,
     on_run_done: Callable[[RunSummary | RunError], None] | None = None,
     on_update: Callable[[SweepProgress], None] | None = None,
+    on_warning: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run every point of an experiment into ``outdir`` and write its index.
 
@@ -564,6 +567,8 @@ def simulate_experiment(
         Called for each run as it is skipped, finishes or fails.
     on_update : callable(SweepProgress), optional
         Called when the counts change, and about every 0.25 s while runs compute.
+    on_warning : callable(str), optional
+        One line per warning (e.g. the run files may not fit on the disk).
 
     Returns
     -------
@@ -573,8 +578,10 @@ def simulate_experiment(
     ------
     ChainrunError
         Conflicting files without ``force``, an output folder that cannot be
-        written, or an executor that cannot be started.
+        written, runs that would not fit in this machine's memory, or an executor
+        that cannot be started.
     """
+    from chainrun.limits import check_runs
     from chainrun.store import write_index
 
     check_placement(jobs=jobs, scheduler=scheduler, scheduler_file=scheduler_file)
@@ -595,6 +602,11 @@ def simulate_experiment(
         raise ChainrunError(f"cannot create output folder {shown}: {exc.strerror}") from None
     if not os.access(outdir, os.W_OK):
         raise ChainrunError(f"output folder {shown} is not writable")
+    if scheduler is None and scheduler_file is None and executor is None:
+        # on a cluster each worker checks its own memory (simulate_run)
+        for warning in check_runs(plan.todo, outdir, runs_at_once=jobs or 1):
+            if on_warning is not None:
+                on_warning(warning)
 
     results: dict[str, RunSummary | RunError] = {}
     counts = SweepProgress(total=len(specs))

@@ -210,11 +210,23 @@ def _create(path: Path, temp: Path, what: str) -> h5py.File:
 
 
 def _commit(h5: h5py.File, temp: Path, path: Path) -> None:
-    """Flush and close ``h5``, fsync it and rename it over ``path``."""
-    h5.flush()
-    h5.close()
-    _fsync(temp)
-    os.replace(temp, path)
+    """Flush and close ``h5``, fsync it and rename it over ``path``.
+
+    Raises StoreError (one line) when the file cannot be completed or put in place
+    (a full disk, a folder under the final name); the temporary file is removed.
+    """
+    try:
+        h5.flush()
+        h5.close()
+        _fsync(temp)
+        os.replace(temp, path)
+    except OSError as exc:
+        try:
+            temp.unlink()
+        except OSError:
+            pass
+        reason = exc.strerror or str(exc)
+        raise StoreError(f"{path}: cannot write ({reason})") from None
     _fsync_dir(path.parent)
 
 
@@ -270,24 +282,45 @@ def check_format(path_or_h5file, expected: str = RUN_FORMAT) -> int:
 def _open_read(name: str) -> h5py.File:
     if not os.path.exists(name):
         raise StoreError(f"{name}: no such file")
+    if os.path.isdir(name):
+        raise StoreError(f"{name}: is a folder, not a file")
     try:
         return h5py.File(name, "r")
     except OSError as exc:
+        if not os.access(name, os.R_OK):
+            raise StoreError(f"{name}: cannot read (permission denied)") from exc
         raise StoreError(f"{name}: truncated or not HDF5") from exc
+
+
+def _h5_reason(exc: BaseException) -> str:
+    """One line for an h5py error: HDF5's own reason, without its stack."""
+    raw = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc  # KeyError quotes
+    text = " ".join(str(raw).split()) or type(exc).__name__
+    found = re.search(r"\(([^()]*)\)\s*$", text)  # "Unable to ... (the reason)"
+    return found.group(1) if found and text.startswith(("Unable", "Can't", "Error")) else text
 
 
 def _check_open(h5: h5py.File, name: str, expected: str) -> int:
     noun = expected.removeprefix("chainrun-")
-    fmt = h5.attrs.get("format")
+    try:
+        fmt = h5.attrs.get("format")
+        raw_version = h5.attrs.get("format_version")
+    except (KeyError, OSError, RuntimeError) as exc:  # a damaged object header
+        raise StoreError(f"{name}: damaged HDF5 file ({_h5_reason(exc)})") from None
     if fmt is None:
         raise StoreError(f"{name}: not a chainrun {noun} file (no format attribute)")
-    fmt = _as_str(fmt)
+    try:
+        fmt = _as_str(fmt)
+    except UnicodeDecodeError:
+        raise StoreError(f"{name}: not a chainrun {noun} file (format is not text)") from None
     if fmt != expected:
         raise StoreError(f"{name}: not a chainrun {noun} file (format {fmt!r})")
-    try:
-        version = int(h5.attrs["format_version"])
-    except (KeyError, TypeError, ValueError):
-        raise StoreError(f"{name}: {fmt} file without a valid format_version") from None
+    if isinstance(raw_version, np.ndarray) and raw_version.shape == ():
+        raw_version = raw_version[()]
+    if not isinstance(raw_version, (int, np.integer)) or isinstance(raw_version, (bool, np.bool_)):
+        # absent, or not an integer: "1", 1.5 or [1] are not version 1
+        raise StoreError(f"{name}: {fmt} file without a valid format_version")
+    version = int(raw_version)
     supported = _FORMAT_VERSIONS[expected]
     if version != supported:
         raise StoreError(
@@ -584,13 +617,20 @@ class Snapshots:
         key = tuple(int(k) % size if isinstance(k, (int, np.integer)) else k
                     for k, size in zip(key, self.shape))
         key = key + (slice(None),) * (2 - len(key)) + (0,)
-        with h5py.File(self.path, "r") as h5:
-            return h5[self.name][key]
+        return self._read(key)
 
     def __array__(self, dtype=None, copy=None):
-        with h5py.File(self.path, "r") as h5:
-            data = h5[self.name][:, :, 0]
+        data = self._read((slice(None), slice(None), 0))
         return data if dtype is None else data.astype(dtype)
+
+    def _read(self, key):
+        """Read a selection, reporting a damaged file as a one-line StoreError."""
+        try:
+            with h5py.File(self.path, "r") as h5:
+                return h5[self.name][key]
+        except (OSError, KeyError) as exc:
+            raise StoreError(f"{self.path}: damaged snapshot data in {self.name} "
+                             f"({exc})") from None
 
     def __repr__(self) -> str:
         return f"Snapshots({str(self.path)!r}, {self.name!r}, shape={self.shape})"
@@ -678,15 +718,23 @@ def read_run(path) -> RunData:
     ------
     StoreError
         If the file is missing, not a chainrun run file, of another format version,
-        or lacks an item of the schema.
+        lacks an item of the schema, or holds one it cannot read (a damaged HDF5
+        object, text that is not UTF-8 or JSON, a number that is not one).
     """
     name = os.fspath(path)
     with _open_read(name) as h5:
         version = _check_open(h5, name, RUN_FORMAT)
         try:
+            _get(h5, "particles/chain/velocity/value")  # read lazily: check it is there
             return _read_run(h5, Path(name), version)
         except KeyError as exc:
-            raise StoreError(f"{name}: damaged run file (missing {exc.args[0]})") from None
+            reason = exc.args[0] if exc.args else ""
+            if isinstance(reason, str) and reason.startswith("Unable"):  # from h5py
+                raise StoreError(f"{name}: damaged run file ({_h5_reason(exc)})") from None
+            raise StoreError(f"{name}: damaged run file (missing {reason})") from None
+        except (OSError, RuntimeError, ValueError, TypeError, OverflowError) as exc:
+            # HDF5 checksum and decoding errors, bad UTF-8 or JSON, "soon" as a time
+            raise StoreError(f"{name}: damaged run file ({_h5_reason(exc)})") from None
 
 
 def _get(h5: h5py.File, item: str):
@@ -844,5 +892,267 @@ def read_index(path) -> list[dict]:
             data = {c: _get(table, c)[()] for c in columns}
         except KeyError as exc:
             raise StoreError(f"{name}: damaged index file (missing {exc.args[0]})") from None
+        except (OSError, ValueError) as exc:
+            raise StoreError(f"{name}: damaged index file ({exc})") from None
     rows = len(data[columns[0]]) if columns else 0
     return [{c: _py(data[c][i]) for c in columns} for i in range(rows)]
+
+
+# ------------------------------------------------------------ resuming sweeps
+# (owned by the runner's resumption; kept apart so it can be edited on its own)
+
+__all__ += ["run_config_hash"]
+
+
+def run_config_hash(path) -> str | None:
+    """The ``config_hash`` of a complete run file, or None if there is none to trust.
+
+    A sweep skips a run whose file returns the run's own hash. None means the file
+    is missing, unreadable, truncated or not HDF5, not a chainrun run file of this
+    format version, or lacks ``/parameters@config_hash``, ``/results`` or
+    ``/diagnostics``. Never raises for a bad file.
+
+    Parameters
+    ----------
+    path : str or path
+
+    Returns
+    -------
+    str or None
+    """
+    name = os.fspath(path)
+    try:
+        with h5py.File(name, "r") as h5:
+            _check_open(h5, name, RUN_FORMAT)
+            if "results" not in h5 or "diagnostics" not in h5:
+                return None
+            value = h5["parameters"].attrs["config_hash"]
+        return _as_str(value) or None
+    except Exception:  # any reason the file cannot be read means: no trusted hash
+        return None
+
+
+# -------------------------------------------------------------------- analysis files
+#
+# An *analysis file* holds what ``chainrun analyze`` derives for one artefact of the
+# paper (a figure, a table or a set of printed numbers): named scalar values, the arrays
+# a figure draws, the settings that produced them, and the sha256 of every run or
+# analysis file read. ``chainrun plot`` reads nothing else. The tree is drawn in
+# ``docs/schema.md``.
+
+ANALYSIS_FORMAT = "chainrun-analysis"
+ANALYSIS_FORMAT_VERSION = 1
+_FORMAT_VERSIONS[ANALYSIS_FORMAT] = ANALYSIS_FORMAT_VERSION
+
+#: Columns of an analysis file's ``/inputs`` table, in order.
+ANALYSIS_INPUT_COLUMNS = ("kind", "name", "file", "sha256")
+
+__all__ += ["ANALYSIS_FORMAT", "ANALYSIS_FORMAT_VERSION", "AnalysisData", "file_sha256",
+            "read_analysis", "write_analysis"]
+
+
+def file_sha256(path) -> str:
+    """The sha256 of a file's bytes, as 64 hex digits."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+    except OSError as exc:
+        raise StoreError(f"{os.fspath(path)}: cannot read ({exc.strerror})") from None
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisData:
+    """The contents of one analysis file.
+
+    Attributes
+    ----------
+    name : str
+        The artefact (``chainrun.artefacts``), e.g. ``"fig05"``.
+    title : str
+    values : dict of str to float
+        Named derived numbers, e.g. ``{"ejected_1": 0.98568}`` (NaN allowed).
+    descriptions : dict of str to str
+        One line per value: what it is and how it was computed.
+    arrays : dict of str to ndarray
+        Arrays by slash-separated path, e.g. ``"series/t=13.5/x"``; numeric or str.
+    attrs : dict of str to dict
+        Attributes of the groups holding the arrays, by path (``"series/t=13.5"``):
+        str, int, float or bool values such as a legend label.
+    settings : dict
+        The parameters of the analysis (fit ranges, thresholds), JSON-compatible.
+    inputs : list of dict
+        Every file read: ``kind`` ("run" or "analysis"), ``name`` (e.g.
+        ``"fig07/n=100"``), ``file`` (its path as read) and ``sha256``.
+    path : Path or None
+        Where it was read from (None before writing).
+    format_version : int
+    created : str
+        ISO 8601 time of writing ("" before writing).
+    creator_version : str
+    """
+
+    name: str
+    title: str
+    values: dict[str, float]
+    descriptions: dict[str, str]
+    arrays: dict[str, np.ndarray]
+    attrs: dict[str, dict[str, Any]]
+    settings: dict[str, Any]
+    inputs: list[dict[str, str]]
+    path: Path | None = None
+    format_version: int = ANALYSIS_FORMAT_VERSION
+    created: str = ""
+    creator_version: str = ""
+
+    def children(self, group: str) -> list[str]:
+        """Names of the sub-groups of ``group`` (e.g. the series), in the order written."""
+        prefix = group.rstrip("/") + "/"
+        names: dict[str, None] = {}
+        for key in list(self.arrays) + list(self.attrs):
+            if key.startswith(prefix):
+                rest = key[len(prefix):]
+                if "/" in rest:
+                    names.setdefault(rest.split("/", 1)[0], None)
+        return list(names)
+
+
+def _check_key(path: Path, key: str) -> None:
+    parts = key.split("/")
+    if not key or any(p in ("", ".", "..") for p in parts):
+        raise StoreError(f"{path}: {key!r} cannot name an HDF5 object")
+
+
+def _ensure_group(root: h5py.Group, key: str) -> h5py.Group:
+    group = root
+    for part in [p for p in key.split("/") if p]:
+        group = group[part] if part in group else _group(group, part)
+    return group
+
+
+def write_analysis(path, data: AnalysisData) -> None:
+    """Write an analysis file atomically (a temporary name, then a rename).
+
+    Parameters
+    ----------
+    path : str or path
+    data : AnalysisData
+        ``path``, ``format_version``, ``created`` and ``creator_version`` are ignored:
+        the file records this chainrun and the time of writing.
+    """
+    path = Path(path)
+    for key in list(data.arrays) + list(data.attrs):
+        _check_key(path, key)
+    for key in data.values:
+        _check_key(path, key)
+        if "/" in key:
+            raise StoreError(f"{path}: value name {key!r} contains '/'")
+    missing = [c for row in data.inputs for c in ANALYSIS_INPUT_COLUMNS if c not in row]
+    if missing:
+        raise StoreError(f"{path}: inputs lack {', '.join(sorted(set(missing)))}")
+
+    temp = _temp_name(path)
+    h5 = _create(path, temp, "analysis file")
+    try:
+        _stamp(h5, ANALYSIS_FORMAT)
+        h5.attrs["artefact"] = str(data.name)
+        h5.attrs["title"] = str(data.title)
+        h5.attrs["creator_name"] = "chainrun"
+        h5.attrs["creator_version"] = chainrun.__version__
+        h5.attrs["settings"] = _to_json(data.settings)
+
+        values = _group(h5, "values")
+        for key, value in data.values.items():
+            ds = values.create_dataset(key, data=np.float64(value))
+            ds.attrs["description"] = str(data.descriptions.get(key, ""))
+
+        arrays = _group(h5, "data")
+        for key in dict.fromkeys(list(data.attrs) + [k.rsplit("/", 1)[0] for k in data.arrays
+                                                      if "/" in k]):
+            _ensure_group(arrays, key)
+        for key, value in data.arrays.items():
+            parent, _, leaf = key.rpartition("/")
+            group = _ensure_group(arrays, parent)
+            value = np.asarray(value)
+            if value.dtype.kind in "US":
+                ds = group.create_dataset(leaf, data=value.astype(object),
+                                          dtype=h5py.string_dtype())
+            else:
+                ds = group.create_dataset(leaf, data=value)
+        for key, attributes in data.attrs.items():
+            group = _ensure_group(arrays, key)
+            for name, value in attributes.items():
+                if not isinstance(value, (str, bool, int, float, np.generic)):
+                    raise StoreError(f"{path}: attribute {key}@{name} is not a scalar")
+                group.attrs[name] = value
+
+        inputs = _group(h5, "inputs")
+        for column in ANALYSIS_INPUT_COLUMNS:
+            inputs.create_dataset(column, data=np.array([str(r[column]) for r in data.inputs],
+                                                        dtype=object),
+                                  dtype=h5py.string_dtype())
+        _commit(h5, temp, path)
+    except BaseException:
+        _discard(h5, temp)
+        raise
+
+
+def read_analysis(path) -> AnalysisData:
+    """Read an analysis file after checking its format and version.
+
+    Raises
+    ------
+    StoreError
+        If the file is missing, not a chainrun analysis file, of another format
+        version, or damaged.
+    """
+    name = os.fspath(path)
+    with _open_read(name) as h5:
+        version = _check_open(h5, name, ANALYSIS_FORMAT)
+        try:
+            values: dict[str, float] = {}
+            descriptions: dict[str, str] = {}
+            for key, ds in _get(h5, "values").items():
+                values[key] = float(ds[()])
+                descriptions[key] = _as_str(ds.attrs.get("description", ""))
+            arrays: dict[str, np.ndarray] = {}
+            attrs: dict[str, dict[str, Any]] = {}
+
+            def visit(group: h5py.Group, prefix: str) -> None:
+                if prefix and len(group.attrs):
+                    attrs[prefix] = {k: _py(v) for k, v in group.attrs.items()}
+                for key, item in group.items():
+                    full = f"{prefix}/{key}" if prefix else key
+                    if isinstance(item, h5py.Group):
+                        visit(item, full)
+                    elif h5py.check_string_dtype(item.dtype) is not None:
+                        arrays[full] = np.array(item.asstr()[()], dtype=str)
+                    else:
+                        arrays[full] = item[()]
+
+            visit(_get(h5, "data"), "")
+            table = _get(h5, "inputs")
+            columns = {c: _get(table, c).asstr()[()] for c in ANALYSIS_INPUT_COLUMNS}
+            rows = len(columns["kind"])
+            inputs = [{c: str(columns[c][i]) for c in ANALYSIS_INPUT_COLUMNS}
+                      for i in range(rows)]
+            return AnalysisData(
+                name=_as_str(_attr(h5, "artefact")),
+                title=_as_str(h5.attrs.get("title", "")),
+                values=values,
+                descriptions=descriptions,
+                arrays=arrays,
+                attrs=attrs,
+                settings=json.loads(_as_str(_attr(h5, "settings"))),
+                inputs=inputs,
+                path=Path(name),
+                format_version=version,
+                created=_as_str(h5.attrs.get("created", "")),
+                creator_version=_as_str(h5.attrs.get("creator_version", "")),
+            )
+        except KeyError as exc:
+            raise StoreError(f"{name}: damaged analysis file (missing {exc.args[0]})") from None

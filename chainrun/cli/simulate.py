@@ -90,6 +90,7 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
                 experiment, outdir, force=force, jobs=jobs, scheduler=scheduler,
                 scheduler_file=scheduler_file, on_progress=bar.run_time,
                 on_run_done=run_done, on_update=bar.update,
+                on_warning=lambda w: click.echo(f"chainrun: warning: {w}", err=True),
             )
         finally:
             bar.clear()

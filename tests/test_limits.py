@@ -1,0 +1,137 @@
+"""Runs too large for the machine: memory refused up front, disk space reported."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from chainrun import limits
+from chainrun.config import parse_experiment
+from chainrun.errors import ChainrunError
+
+GB = 10**9
+
+
+def state_bytes(n: int) -> int:
+    """Bytes of the arrays the solver allocates for N balls, counted on the real state."""
+    from chainrun.solver import _driver
+
+    state = _driver._new_state(n, 1, 1.5, 1e-12, None, None)
+    return sum(a.nbytes for a in state if isinstance(a, np.ndarray))
+
+
+@pytest.mark.parametrize("n", [10, 1000, 100_000])
+def test_the_estimate_covers_the_solver_state(n):
+    """The estimate counts at least what ``_driver._new_state`` allocates, and not far more.
+
+    If this fails after a change of the solver's state, update the constants of
+    ``chainrun.limits`` (bytes per ball, window) to match.
+    """
+    actual = state_bytes(n)
+    estimate = limits.estimate_run_memory(n, 0)
+    assert estimate >= actual
+    assert estimate - limits.FIXED_BYTES <= 4 * max(actual - 2 * (1 << 16) * 17, 1) + 10**6
+
+
+def test_the_estimate_grows_with_n_and_not_with_snapshots_times_n():
+    small = limits.estimate_run_memory(10**6, 10)
+    assert limits.estimate_run_memory(10**7, 10) > 9 * (small - limits.FIXED_BYTES)
+    # snapshots are streamed: a thousand more cost about a thousand times, not N each
+    more = limits.estimate_run_memory(10**6, 1010) - small
+    assert 0 < more < 1000 * 1000
+    kept = limits.estimate_run_memory(10**6, 1010, keep_snapshots=True) - small
+    assert kept > 1000 * 2 * 8 * 10**6
+
+
+def test_check_memory_refuses_with_the_numbers():
+    need = limits.estimate_run_memory(10**9, 61)
+    with pytest.raises(ChainrunError) as info:
+        limits.check_memory(10**9, 61, available=8 * GB)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith("a run of N = 1000000000 balls with 61 snapshots needs about ")
+    assert f"{need / GB:.1f} GB of memory" in message
+    assert message.endswith("but 8.0 GB is available")
+    assert limits.check_memory(1000, 61, available=8 * GB) == limits.estimate_run_memory(1000, 61)
+
+
+def test_check_memory_counts_runs_at_once():
+    need = limits.estimate_run_memory(10**7, 10)
+    assert limits.check_memory(10**7, 10, available=2 * need) == need
+    with pytest.raises(ChainrunError, match=r"\(4 at once: "):
+        limits.check_memory(10**7, 10, available=2 * need, runs_at_once=4)
+
+
+def test_absurd_n_is_refused_on_this_machine():
+    with pytest.raises(ChainrunError, match="memory"):
+        limits.check_memory(2**62, 2)
+
+
+def test_memory_available_reads_meminfo_and_falls_back(tmp_path, monkeypatch):
+    meminfo = tmp_path / "meminfo"
+    meminfo.write_text("MemTotal:       16000000 kB\nMemFree:  100 kB\n"
+                       "MemAvailable:    8000000 kB\n")
+    monkeypatch.setattr(limits, "_MEMINFO", str(meminfo))
+    assert limits.memory_available() == 8000000 * 1024
+
+    # an old kernel without MemAvailable, or no /proc: free pages from sysconf
+    meminfo.write_text("MemTotal: 16000000 kB\n")
+    monkeypatch.setattr(limits.os, "sysconf",
+                        lambda name: {"SC_AVPHYS_PAGES": 1000, "SC_PAGE_SIZE": 4096}[name])
+    assert limits.memory_available() == 4096 * 1000
+    monkeypatch.setattr(limits, "_MEMINFO", str(tmp_path / "absent"))
+    assert limits.memory_available() == 4096 * 1000
+
+    def no_sysconf(name):
+        raise ValueError(name)
+
+    monkeypatch.setattr(limits.os, "sysconf", no_sysconf)
+    assert limits.memory_available() is None
+    # unknown: nothing is refused
+    assert limits.check_memory(2**40, 10) == limits.estimate_run_memory(2**40, 10)
+
+
+def test_disk_space_is_reported(tmp_path):
+    size = limits.estimate_file_size(10**6, 1000)
+    assert size >= 1000 * 10**6 * 2 * 8
+    assert limits.check_disk(10**6, 1000, tmp_path, free=size + 1) is None
+    warning = limits.check_disk(10**6, 1000, tmp_path, free=10 * GB)
+    assert warning == (f"the run file may take up to {size / GB:.1f} GB before compression, "
+                       f"and 10.0 GB is free in {tmp_path}")
+    warning = limits.check_disk(10**6, 1000, tmp_path, free=10 * GB, runs=3)
+    assert warning.startswith("the 3 run files may take up to ")
+
+
+def test_free_disk_of_a_folder_not_made_yet(tmp_path):
+    free = limits.free_disk(tmp_path / "not" / "yet")
+    assert free is not None and free > 0
+    assert limits.check_disk(5, 10, tmp_path / "not" / "yet") is None
+    assert "free in" in limits.check_disk(10**9, 10**6, tmp_path / "not" / "yet")
+
+
+def test_check_runs_of_a_sweep(tmp_path):
+    exp = parse_experiment(
+        'name = "x"\n[chain]\nn = 10\nk = 1\nalpha = 1.5\n[output]\n'
+        'times = {start = 0, stop = 99, step = 1}\n[sweep]\n"chain.n" = [10, 1000000, 100]\n',
+        "toml")
+    specs = exp.runs()
+    assert limits.check_runs(specs, tmp_path, available=8 * GB, free=100 * GB) == []
+    big = limits.estimate_run_memory(10**6, 100)
+    with pytest.raises(ChainrunError, match="N = 1000000 balls with 100 snapshots"):
+        limits.check_runs(specs, tmp_path, available=big - 1, free=100 * GB)
+    with pytest.raises(ChainrunError, match="3 at once"):
+        limits.check_runs(specs, tmp_path, runs_at_once=8, available=2 * big, free=100 * GB)
+    (warning,) = limits.check_runs(specs, tmp_path, available=8 * GB, free=10**6)
+    assert warning.startswith("the 3 run files may take up to 1.6 GB before compression")
+    assert limits.check_runs([], tmp_path) == []
+
+
+def test_module_imports_neither_the_solver_nor_h5py():
+    tree = ast.parse(Path(limits.__file__).read_text())
+    names = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
+             for alias in node.names}
+    names |= {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    assert not {name for name in names if name.startswith(("h5py", "chainrun.solver", "numba"))}
