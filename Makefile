@@ -11,7 +11,8 @@ CONFIGS := $(wildcard configs/*.toml configs/*.yaml)
 
 help:
 	@echo "make test     install into .venv (if needed) and run the test suite"
-	@echo "make figures  run every experiment in configs/ into results/"
+	@echo "make figures  every figure, table and number of the paper into results/"
+	@echo "              (make -j2 figures runs independent experiments side by side)"
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -22,10 +23,65 @@ $(STAMP): pyproject.toml
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q
 
+# ---- make bench: chainrun against its peers (benchmarks/README.md) ----------------------
+# The bench extra adds the optional peers (heyoka); if it cannot be installed, chainrun
+# alone is installed and the harness skips those peers with a note.
+# `make bench BENCH_ARGS=--full` runs the largest cases too.
+BENCH_STAMP := $(VENV)/.chainrun-bench-installed
+BENCH_ARGS  ?=
+
+$(BENCH_STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[bench]' || { \
+	  echo "make bench: the bench extra (heyoka) could not be installed; its peer is skipped"; \
+	  $(BIN)/python -m pip install --quiet -e .; }
+	touch $@
+
+.PHONY: bench
+bench: $(BENCH_STAMP)
+	$(BIN)/python -m benchmarks.run $(BENCH_ARGS)
+
 simulate: $(STAMP)
 	@for c in $(CONFIGS); do $(BIN)/chainrun simulate $$c --force || exit 1; done
 
-figures: simulate
+# ---- make figures: simulate -> analyze -> plot for every artefact of the paper ----------
+# The artefacts and their inputs come from one registry, chainrun/artefacts.py, written
+# out as make rules by `chainrun plot --list --format make` into $(RESULTS)/artefacts.mk.
+# Only stale outputs rebuild: a run folder when its config or the solver changes, an
+# analysis file when its runs, the analysis files it reads or the analysis code change, a
+# figure or table when its analysis file or its drawing code changes.
+RESULTS  ?= results
+JOBS     ?= 2
+CHAINRUN := $(BIN)/chainrun
+SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py chainrun/runner.py \
+                    chainrun/store.py
+ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py \
+                    chainrun/analysis/similarity.py chainrun/analysis/nesterenko.py \
+                    chainrun/artefacts.py chainrun/store.py
+PLOT_SOURCES     := chainrun/plotting/__init__.py chainrun/plotting/common.py \
+                    chainrun/plotting/chainrun.mplstyle
+ARTEFACT_RULES   := $(RESULTS)/artefacts.mk
+
+$(ARTEFACT_RULES): chainrun/artefacts.py $(STAMP)
+	@mkdir -p $(@D)
+	$(CHAINRUN) plot --list --format make --results $(RESULTS) > $@.partial
+	mv $@.partial $@
+
+ifneq ($(filter figures $(RESULTS)/%,$(MAKECMDGOALS)),)
+include $(ARTEFACT_RULES)
+endif
+
+# A run folder is rebuilt from scratch: `chainrun simulate` skips run files of the same
+# config, which would keep results of an older solver.
+$(RESULTS)/runs/%/index.h5: configs/%.toml $(SOLVER_SOURCES) | $(STAMP)
+	rm -rf $(@D)
+	$(CHAINRUN) simulate $< -o $(@D) --jobs $(JOBS)
+
+$(RESULTS)/analysis/%.h5: $(ANALYSIS_SOURCES) | $(STAMP)
+	$(CHAINRUN) analyze $* --results $(RESULTS)
+
+figures: $(STAMP) $(ARTEFACT_OUTPUTS)
 
 clean-results:
 	rm -rf results

@@ -1,0 +1,1 @@
+"""Benchmarks of chainrun against its peers (``make bench``; see README.md here)."""
