@@ -48,3 +48,24 @@ def draw_series(axes, data: AnalysisData, name: str, group: str = "series", **st
     style.setdefault("color", "black")
     (line,) = axes.plot(data.arrays[f"{key}/x"], data.arrays[f"{key}/y"], gid=key, **style)
     return line
+
+
+def draw_displacement_waves(data: AnalysisData, n_max: float):
+    """Displacements x_n against n at several times, each curve labelled with its
+    time at the foot of its wave front (figures 8, 10 and 11)."""
+    figure, ax = new_figure()
+    names = series_names(data, "data")
+    for name in names:
+        draw_series(ax, data, name, linestyle="-")
+    for name in names:
+        x = data.arrays[f"series/{name}/x"]
+        y = data.arrays[f"series/{name}/y"]
+        foot = x[y > 1e-3].max()
+        ax.annotate(data.attrs[f"series/{name}"]["label"].replace("t = ", "t="),
+                    xy=(foot, 0.0), xytext=(1, 2), textcoords="offset points",
+                    ha="left", va="bottom", fontsize=6, rotation=90)
+    ax.set_xlabel(r"$n$")
+    ax.set_ylabel(r"$x_n$")
+    ax.set_xlim(0.0, n_max)
+    ax.set_ylim(0.0, None)
+    return figure
