@@ -199,7 +199,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     e0 = 0.5 * k
     e1 = float(kinetic_energy(v_final) + potential_energy(x_final, alpha))
     event_time = np.concatenate(ev_t)
-    message = _message(outcome, t_final, n, int(S.ints[K.I_EVTOTAL]), S)
+    message = _message(outcome, t_final, int(S.ints[K.I_EVTOTAL]), S)
     diagnostics = Diagnostics(
         steps=int(S.ints[K.I_STEPS]),
         rejected_steps=int(S.ints[K.I_REJ]),
@@ -224,7 +224,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     )
 
 
-def _message(outcome: Outcome, t: float, n: int, events: int, S: K.State) -> str:
+def _message(outcome: Outcome, t: float, events: int, S: K.State) -> str:
     if outcome is Outcome.TERMINAL:
         return f"terminal state reached at t = {t:.6g} after {events} events"
     if outcome is Outcome.STOP_TIME:

@@ -97,7 +97,7 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_REDO, I_NDENSE, I_NINT = range(22)
+    I_NINT = range(20)
 
 State = namedtuple(
     "State",
@@ -507,7 +507,6 @@ def _dense(S):
     """Build the order-7 interpolant of the last accepted step (3 extra stages)."""
     if S.ints[I_DENSE] == 1:
         return
-    S.ints[I_NDENSE] += 1
     m = S.ints[I_M]
     h = S.fs[F_HLAST]
     KX, KV, X0, V0, X, V, FX, FV = S.KX, S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
@@ -1457,7 +1456,6 @@ def _advance(S):
             hev = th * h
             good = True
             for _ in range(6):
-                S.ints[I_REDO] += 1
                 if not (_step(S, hev) <= 1.0):
                     good = False
                     break
