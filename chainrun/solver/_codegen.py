@@ -3,7 +3,8 @@
 (It also writes ``_borrowed_state``, which must name every field of ``State``.)
 
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
-previous stages. Written as loops over the tableau, a window of a dozen balls spends
+previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerations
+alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls spends
 its time in loop overhead; written out with the coefficients as literals, each stage
 is one pass over the balls. This script regenerates the section of ``_kernels.py``
 between the markers below from scipy's DOP853 tableau::
@@ -24,6 +25,7 @@ from scipy.integrate._ivp import dop853_coefficients as dop
 BEGIN = "# ---- BEGIN GENERATED STAGES (python -m chainrun.solver._codegen) ----"
 END = "# ---- END GENERATED STAGES ----"
 TARGET = Path(__file__).with_name("_kernels.py")
+EPS = np.finfo(float).eps
 
 
 def _combo(coefs, rows: str, scale: str) -> str:
@@ -31,21 +33,30 @@ def _combo(coefs, rows: str, scale: str) -> str:
     return f"{scale} * (" + " + ".join(terms) + ")"
 
 
-def _stage_pass(out_x: str, s: int, coefs) -> list[str]:
-    """Stage s: positions into out_x, velocities into KX[s], accelerations into KV[s]."""
+def _force_pass(x: str, s: int) -> list[str]:
+    """Accelerations at positions x into KV[s]: contact forces first (a loop without a
+    carried dependency, which the compiler vectorises), then their differences."""
     return [
-        "    for p in range(m):",
-        f"        {out_x}[p] = X0[p] + {_combo(coefs, 'KX', 'h')}",
-        f"        KX[{s}, p] = V0[p] + {_combo(coefs, 'KV', 'h')}",
         "    for c in range(ncl):",
         "        o = coff[c]",
         "        e = o + chi[c] - clo[c]",
-        "        prev = 0.0",
-        "        for p in range(o, e):",
-        f"            f = _force({out_x}[p] - {out_x}[p + 1], mode, alpha)",
-        f"            KV[{s}, p] = prev - f",
-        "            prev = f",
-        f"        KV[{s}, e] = prev",
+        f"        _forces({x}, F, o, e, mode, alpha)",
+        f"        KV[{s}, o] = -F[o]",
+        "        for p in range(o + 1, e):",
+        f"            KV[{s}, p] = F[p - 1] - F[p]",
+        f"        KV[{s}, e] = F[e - 1]",
+    ]
+
+
+def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
+    """Stage s in Nystrom form: positions into out_x, accelerations into KV[s]."""
+    drift = f"{float(node)!r} * V0[p]"
+    if np.any(coefs != 0.0):
+        drift += f" + {_combo(coefs, 'KV', 'h')}"
+    return [
+        "    for p in range(m):",
+        f"        {out_x}[p] = X0[p] + h * ({drift})",
+        *_force_pass(out_x, s),
     ]
 
 
@@ -54,8 +65,23 @@ _PROLOGUE = [
     "    ncl = S.ints[I_NCL]",
     "    mode = S.ints[I_MODE]",
     "    alpha = S.fs[F_ALPHA]",
-    "    coff, clo, chi = S.coff, S.clo, S.chi",
+    "    coff, clo, chi, F = S.coff, S.clo, S.chi, S.FS",
 ]
+
+
+def _nystrom(rows):
+    """Coefficients on the accelerations of ``rows @ KX``, whose entries sum to zero.
+
+    For x'' = a(x) the stage velocities are KX[j] = V0 + h sum_k A[j, k] KV[k], so
+    ``r @ KX = sum(r) V0 + h (r @ A) @ KV``: the step needs no stage velocities.
+    The error and dense-output rows of DOP853 sum to zero (up to rounding).
+    """
+    rows = np.atleast_2d(rows)
+    width = rows.shape[1]
+    sums = rows.sum(axis=1)
+    if np.any(np.abs(sums) > 64 * EPS * np.abs(rows).sum(axis=1)):
+        raise ValueError(f"rows do not sum to zero: {sums}")
+    return rows @ dop.A[:width, :width]
 
 
 def _state_fields(text: str) -> list[str]:
@@ -65,26 +91,33 @@ def _state_fields(text: str) -> list[str]:
 
 
 def generate(text: str) -> str:
-    A, B = dop.A, dop.B
+    A, B, C = dop.A, dop.B, dop.C
     ns, nse = dop.N_STAGES, dop.N_STAGES_EXTENDED
+    AA = A @ A  # stage positions: X0 + h C V0 + h^2 (A @ A) @ KV
     lines = [
         BEGIN,
         "@nb.njit(cache=True)",
         "def _stages(S, h):",
-        '    """The 12 stages of a DOP853 step from (X0, V0, A0): new X in X, new V in KX[12].',
+        '    """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.',
         "",
-        "    KX[s] holds the stage velocities (the x part of f), KV[s] the accelerations",
-        "    (the force loop of _rhs, written out so no array view is made per stage).",
+        "    DOP853 applied to y = (x, v), y' = (v, a(x)), written in Nystrom form: the",
+        "    stage velocities are eliminated, KV[s] holds the stage accelerations and",
+        "    KV[12] those at the step's end.",
         '    """',
         *_PROLOGUE,
-        "    KX, KV, X0, V0, A0, X = S.KX, S.KV, S.X0, S.V0, S.A0, S.X",
+        "    KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V",
         "    for p in range(m):",
-        "        KX[0, p] = V0[p]",
         "        KV[0, p] = A0[p]",
     ]
     for s in range(1, ns):
-        lines += _stage_pass("X", s, A[s, :s])
-    lines += _stage_pass("X", ns, B)
+        lines += _stage_pass("X", s, C[s], AA[s, :s])
+    lines += [
+        "    for p in range(m):",
+        f"        X[p] = X0[p] + h * (V0[p] + {_combo(AA[ns, :ns], 'KV', 'h')})",
+        f"        V[p] = V0[p] + {_combo(B, 'KV', 'h')}",
+        *_force_pass("X", ns),
+    ]
+    e5x, e3x = _nystrom(dop.E5), _nystrom(dop.E3)
     lines += [
         "",
         "",
@@ -92,15 +125,16 @@ def generate(text: str) -> str:
         "def _error_norm(S, h):",
         '    """DOP853\'s error estimate of the last step, max over balls, scaled by the tolerance."""',
         "    m = S.ints[I_M]",
-        "    KX, KV, X0, V0, X, V = S.KX, S.KV, S.X0, S.V0, S.X, S.V",
+        "    KV, X0, V0, X, V = S.KV, S.X0, S.V0, S.X, S.V",
         "    tol = S.fs[F_TOL]",
         "    err = 0.0",
         "    for p in range(m):",
     ]
-    for comp, rows, y0, y1 in (("x", "KX", "X0", "X"), ("v", "KV", "V0", "V")):
+    for e5, e3, y0, y1 in ((e5x[0], e3x[0], "X0", "X"), (dop.E5, dop.E3, "V0", "V")):
+        scale = "h" if y0 == "X0" else "1.0"
         lines += [
-            f"        e5 = {_combo(dop.E5, rows, '1.0')}",
-            f"        e3 = {_combo(dop.E3, rows, '1.0')}",
+            f"        e5 = {_combo(e5, 'KV', scale)}",
+            f"        e3 = {_combo(e3, 'KV', scale)}",
             f"        sc = tol + 64.0 * EPS * max(abs({y0}[p]), abs({y1}[p]))",
             "        d = e5 * e5 + 0.01 * e3 * e3",
             "        if d > 0.0:",
@@ -117,10 +151,11 @@ def generate(text: str) -> str:
         '    """The three extra stages of the dense output (positions staged in XS)."""',
         *_PROLOGUE,
         "    h = S.fs[F_HLAST]",
-        "    KX, KV, X0, V0, Xs = S.KX, S.KV, S.X0, S.V0, S.XS",
+        "    KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS",
     ]
     for s in range(ns + 1, nse):
-        lines += _stage_pass("Xs", s, A[s, :s])
+        lines += _stage_pass("Xs", s, C[s], AA[s, :s])
+    dx = _nystrom(dop.D)
     lines += [
         "",
         "",
@@ -129,11 +164,11 @@ def generate(text: str) -> str:
         '    """Rows 3..6 of the interpolant: h * D @ K for positions and velocities."""',
         "    m = S.ints[I_M]",
         "    h = S.fs[F_HLAST]",
-        "    KX, KV, FX, FV = S.KX, S.KV, S.FX, S.FV",
+        "    KV, FX, FV = S.KV, S.FX, S.FV",
         "    for p in range(m):",
     ]
     for r in range(dop.D.shape[0]):
-        lines.append(f"        FX[{3 + r}, p] = {_combo(dop.D[r], 'KX', 'h')}")
+        lines.append(f"        FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"        FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
     lines += [
         "",

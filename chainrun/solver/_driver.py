@@ -72,7 +72,7 @@ def _alloc_window(cap: int) -> dict:
         cb=np.zeros(cap, np.int64),
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
-        KX=np.zeros((K._NSE, cap)), KV=np.zeros((K._NSE, cap)),
+        FS=np.zeros(cap), KV=np.zeros((K._NSE, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)),
     )
 
