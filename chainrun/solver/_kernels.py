@@ -45,15 +45,8 @@ import numpy as np
 from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
-# ---- DOP853 tableau (scipy's copy of Hairer's coefficients) --------------------------
-_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
-_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
-_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
-_E3 = np.ascontiguousarray(_dop.E3, dtype=np.float64)
-_E5 = np.ascontiguousarray(_dop.E5, dtype=np.float64)
-_D = np.ascontiguousarray(_dop.D, dtype=np.float64)
+# ---- DOP853 (its tableau is written into the stage code by _codegen) -----------------
 _NS = 12  # stages of the step proper; row 12 holds f at the step's end (FSAL)
 _NSE = 16  # with the three extra stages of the dense output
 
