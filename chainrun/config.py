@@ -30,6 +30,7 @@ nothing else, whatever the text (``tests/test_fuzz.py`` checks it).
 from __future__ import annotations
 
 import difflib
+import functools
 import hashlib
 import itertools
 import json
@@ -44,7 +45,6 @@ from dataclasses import dataclass, field
 from typing import Annotated, Any, NamedTuple
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -854,31 +854,38 @@ def _value_error(exc: Exception) -> str:
     return text or type(exc).__name__
 
 
-class _YamlLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` whose failures to convert a value name its place.
+@functools.cache
+def _yaml():
+    """PyYAML and ``_YamlLoader``, imported and built on the first YAML file read.
 
-    PyYAML converts ``2001-13-45`` (a date), ``!!int x`` or an integer of 5000 digits
-    with plain ``int()`` or ``datetime``; their ``ValueError`` carries no line. It also
-    expands merge keys without bound; this loader stops at ``MAX_MERGED`` entries.
+    ``_YamlLoader`` is ``yaml.SafeLoader`` whose failures to convert a value name their
+    place. PyYAML converts ``2001-13-45`` (a date), ``!!int x`` or an integer of 5000
+    digits with plain ``int()`` or ``datetime``; their ``ValueError`` carries no line.
+    It also expands merge keys without bound; this loader stops at ``MAX_MERGED``
+    entries.
     """
+    import yaml
 
-    def flatten_mapping(self, node):
-        # Merge keys ("<<: [*a, *a, ...]") copy entries: nested merges grow exponentially.
-        super().flatten_mapping(node)
-        if len(node.value) > MAX_MERGED:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"more than {MAX_MERGED} entries after merging '<<' keys",
-                node.start_mark,
-            )
+    class _YamlLoader(yaml.SafeLoader):
+        def flatten_mapping(self, node):
+            # Merge keys ("<<: [*a, *a, ...]") copy entries: nested merges grow exponentially.
+            super().flatten_mapping(node)
+            if len(node.value) > MAX_MERGED:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"more than {MAX_MERGED} entries after merging '<<' keys",
+                    node.start_mark,
+                )
 
-    def construct_object(self, node, deep=False):
-        try:
-            return super().construct_object(node, deep=deep)
-        except (ValueError, TypeError, OverflowError) as exc:
-            value = f"{_show(node.value)}: " if isinstance(node.value, str) else ""
-            raise yaml.constructor.ConstructorError(
-                None, None, f"cannot read {value}{_value_error(exc)}", node.start_mark
-            ) from None
+        def construct_object(self, node, deep=False):
+            try:
+                return super().construct_object(node, deep=deep)
+            except (ValueError, TypeError, OverflowError) as exc:
+                value = f"{_show(node.value)}: " if isinstance(node.value, str) else ""
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"cannot read {value}{_value_error(exc)}", node.start_mark
+                ) from None
+
+    return yaml, _YamlLoader
 
 
 def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experiment:
@@ -906,13 +913,17 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
     fmt = {"yml": "yaml"}.get(fmt, fmt)
     if fmt not in ("toml", "yaml"):
         raise ConfigError(source, [f"unknown format {fmt!r} (expected 'toml' or 'yaml')"])
-    if fmt == "yaml":
+    if fmt == "toml":
+        load, syntax_error = tomllib.loads, tomllib.TOMLDecodeError
+    else:
         deep = _too_deep(text)
         if deep:
             raise ConfigError(source, [f"line {deep}: nested more than {MAX_DEPTH} levels deep"])
+        yaml, loader = _yaml()
+        load, syntax_error = functools.partial(yaml.load, Loader=loader), yaml.YAMLError
     try:
-        data = tomllib.loads(text) if fmt == "toml" else yaml.load(text, Loader=_YamlLoader)
-    except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
+        data = load(text)
+    except syntax_error as exc:
         raise ConfigError(source, [_one_line(_syntax_line(exc, text, fmt))]) from None
     except RecursionError:
         raise ConfigError(source, ["nested too deeply to read"]) from None

@@ -305,13 +305,16 @@ class InlineExecutor(cf.Executor):
         return future
 
 
-class _ProcessExecutor(cf.ProcessPoolExecutor):
-    """Local processes, for ``jobs > 1`` when Dask is not installed."""
+def _process_executor(jobs: int) -> cf.ProcessPoolExecutor:
+    """Local processes, for ``jobs > 1`` when Dask is not installed.
 
-    def __init__(self, jobs: int):
-        super().__init__(max_workers=jobs)
-        self.slots = jobs
-        self.workers = f"on {jobs} local processes"
+    A function rather than a subclass: ``cf.ProcessPoolExecutor`` imports
+    multiprocessing, which a sweep in this process does not need.
+    """
+    executor = cf.ProcessPoolExecutor(max_workers=jobs)
+    executor.slots = jobs
+    executor.workers = f"on {jobs} local processes"
+    return executor
 
 
 class DaskExecutor(cf.Executor):
@@ -521,7 +524,7 @@ def open_executor(*, jobs: int | None = None, scheduler: str | None = None,
         return InlineExecutor()
     if dask_available():
         return DaskExecutor.local(jobs)
-    return _ProcessExecutor(jobs)
+    return _process_executor(jobs)
 
 
 # --------------------------------------------------------------------------- a sweep

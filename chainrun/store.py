@@ -35,16 +35,18 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 import h5py
 import numpy as np
 
 import chainrun
-from chainrun.config import RunSpec
 from chainrun.errors import StoreError
 from chainrun.solver import EventKind, Solution
 from chainrun.solver import physics
+
+if TYPE_CHECKING:  # the config parser (pydantic, YAML) is not needed to read files
+    from chainrun.config import RunSpec
 
 __all__ = [
     "INDEX_FORMAT",

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -123,3 +125,24 @@ def test_an_unreachable_scheduler_is_one_line(cli, tmp_path, monkeypatch):
     error = result.stderr.strip().splitlines()[-1]
     assert error.startswith("chainrun: error: cannot connect to Dask at tcp://127.0.0.1:9")
     assert "Traceback" not in result.output
+
+
+@pytest.mark.parametrize("statement, absent", [
+    # every command starts here: each imports its libraries when it needs them
+    ("import chainrun.cli",
+     ["matplotlib", "dask", "distributed", "scipy", "numba", "h5py", "pydantic", "yaml"]),
+    # reading run and analysis files (analyze, plot) needs no config parser
+    ("import chainrun.store", ["chainrun.config", "pydantic", "yaml", "numba", "scipy"]),
+    # a TOML experiment file needs no YAML parser
+    ("from chainrun.config import parse_experiment; "
+     "parse_experiment('name = \"x\"\\n[chain]\\nn = 2\\nk = 1\\nalpha = 1.5\\n', 'toml')",
+     ["yaml", "numba", "scipy"]),
+    # the solver's kernels carry their tableau as literals (see _codegen)
+    ("import chainrun.solver", ["scipy", "matplotlib", "h5py", "pydantic"]),
+])
+def test_start_up_imports_only_what_is_needed(tmp_path, statement, absent):
+    # The whole process's wall time is what a run costs, start-up included.
+    code = f"import sys\n{statement}\nprint(' '.join(m for m in {absent!r} if m in sys.modules))"
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.split() == []
