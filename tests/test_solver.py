@@ -312,6 +312,37 @@ def test_tightest_tolerance_runs_to_the_end():
     assert sol.diagnostics.momentum_error < 1e-12
 
 
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+def test_gap_closing_within_the_time_resolution(alpha):
+    """Late in a long run t is resolved only to about 1e-12: two free balls whose gap
+    closes sooner than that collide at the present instant, still a hair apart. The
+    contact must stay closed (it used to open at once and close again, forever)."""
+    from chainrun.solver import _driver as D
+    from chainrun.solver import _kernels as K
+
+    t0, w, gap = 7159.550196, 0.3, 1e-13
+    assert t0 + gap / w == t0  # the collision is at the present instant
+    S = D._new_state(2, 1, alpha, 1e-12, None, None)
+    S.cst[0] = K.OPEN
+    S.ints[K.I_NCL] = 0
+    S.ints[K.I_DIRTY] = 0
+    S.fs[K.F_T] = t0
+    S.bx[:] = (-gap, 0.0)
+    S.bv[:] = (w, 0.0)
+    S.bt[:] = t0
+    K._schedule_pair(S, 0)
+    statuses = []
+    while len(statuses) < 1000:
+        statuses.append(K.advance(S))
+        if statuses[-1] == K.ST_FLUSH:
+            S.ints[K.I_NEV] = 0
+        elif statuses[-1] not in (K.ST_YIELD,):
+            break
+    assert statuses[-1] == K.ST_TERMINAL
+    assert int(S.ints[K.I_EVTOTAL]) == 2  # one closing, one opening
+    np.testing.assert_allclose(S.bv, [0.0, w], rtol=0, atol=1e-12)
+
+
 def test_generated_stages_are_current():
     """The straight-line DOP853 stages in _kernels.py match scipy's tableau."""
     from chainrun.solver import _codegen

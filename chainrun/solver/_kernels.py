@@ -86,11 +86,11 @@ YIELD_STEPS = 20000
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
-    F_EPROJ, F_NFLOAT = range(12)
+    F_EPROJ, F_TSAME, F_NFLOAT = range(13)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NINT = range(20)
+    I_NSAME, I_NINT = range(21)
 
 State = namedtuple(
     "State",
@@ -1244,8 +1244,10 @@ def _due(S, j):
     xr = S.bx[j + 1] + dr
     c = xl - xr
     w = S.bv[j] - S.bv[j + 1]
-    # the rounding of a free ball's x + v (t - tref) comes from its terms, not its value
-    r = _rounding(abs(xl) + abs(xr) + abs(dl) + abs(dr))
+    # the rounding of a free ball's x + v (t - tref) comes from its terms, not its value;
+    # and t itself is resolved only to EPS t, in which balls closing at w move w EPS t:
+    # a gap that closes within that is closed now (else it opens and closes forever)
+    r = _rounding(abs(xl) + abs(xr) + abs(dl) + abs(dr)) + 4.0 * EPS * abs(t) * abs(w)
     st = S.cst[j]
     if st == ACTIVE:
         if (c <= r and w < 0.0) or c < -r:
@@ -1381,6 +1383,17 @@ def _advance(S):
         if _heap_valid_top(S):
             tcol = S.hp_t[0]
             if tcol <= t:
+                # collisions at one instant: each contact closes there at most a few
+                # times; more means states flipping back and forth, a defect that is
+                # reported (as by _settle) rather than run forever
+                if t == S.fs[F_TSAME]:
+                    S.ints[I_NSAME] += 1
+                    if S.ints[I_NSAME] > 4 * S.cst.shape[0] + 64:
+                        S.ints[I_NEED] = 0
+                        return ST_GROW
+                else:
+                    S.fs[F_TSAME] = t
+                    S.ints[I_NSAME] = 0
                 j = S.hp_j[0]
                 _heap_pop(S)
                 S.ints[I_EVJ] = j
