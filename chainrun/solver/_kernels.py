@@ -336,29 +336,35 @@ def _stages(S, h):
 
 @nb.njit(cache=True)
 def _error_norm(S, h):
-    """DOP853's error estimate of the last step, max over balls, scaled by the tolerance."""
+    """DOP853's error estimate of the last step, max over balls, scaled by the tolerance.
+
+    Per component e = |h| e5^2 / (sqrt(d) sc), d = e5^2 + e3^2 / 100; the largest
+    e^2 = h^2 e5^4 / (d sc^2) is kept as a fraction, so the loop takes no square
+    root or division per ball. An infinite or NaN fraction is kept (it fails the step).
+    """
     m = S.ints[I_M]
     KV, X0, V0, X, V = S.KV, S.X0, S.V0, S.X, S.V
     tol = S.fs[F_TOL]
-    err = 0.0
+    num = 0.0
+    den = 1.0
     for p in range(m):
         e5 = h * (-0.1886518800179879 * KV[0, p] + 0.9962151331241323 * KV[3, p] + 0.23599761577747436 * KV[4, p] + -2.854630682350912 * KV[5, p] + -4.082808827933706 * KV[6, p] + 6.038341535948958 * KV[7, p] + 0.39584534789657555 * KV[8, p] + -0.5259249995299615 * KV[9, p] + -0.014383242914573597 * KV[10, p])
         e3 = h * (-0.45385457342917346 * KV[0, p] + 2.698758502261861 * KV[3, p] + 0.6812767760191378 * KV[4, p] + -16.885342816594815 * KV[5, p] + -13.987876814514605 * KV[6, p] + 27.96175549233409 * KV[7, p] + 0.3042333850581198 * KV[8, p] + -0.3335239499192925 * KV[9, p] + 0.014573998784681819 * KV[10, p])
         sc = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
-        d = e5 * e5 + 0.01 * e3 * e3
-        if d > 0.0:
-            e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
-            if e > err:
-                err = e
+        n = e5 * e5 * e5 * e5
+        d = (e5 * e5 + 0.01 * e3 * e3) * sc * sc
+        if num < np.inf and not n * den <= num * d:
+            num = n
+            den = d
         e5 = 1.0 * (0.01312004499419488 * KV[0, p] + -1.2251564463762044 * KV[5, p] + -0.4957589496572502 * KV[6, p] + 1.6643771824549864 * KV[7, p] + -0.35032884874997366 * KV[8, p] + 0.3341791187130175 * KV[9, p] + 0.08192320648511571 * KV[10, p] + -0.022355307863886294 * KV[11, p])
         e3 = 1.0 * (-0.18980075407240762 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + -0.4226823213237919 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.02265179219836082 * KV[11, p])
         sc = tol + 64.0 * EPS * max(abs(V0[p]), abs(V[p]))
-        d = e5 * e5 + 0.01 * e3 * e3
-        if d > 0.0:
-            e = abs(h) * e5 * e5 / (np.sqrt(d) * sc)
-            if e > err:
-                err = e
-    return err
+        n = e5 * e5 * e5 * e5
+        d = (e5 * e5 + 0.01 * e3 * e3) * sc * sc
+        if num < np.inf and not n * den <= num * d:
+            num = n
+            den = d
+    return abs(h) * np.sqrt(num / den)
 
 
 @nb.njit(cache=True)
