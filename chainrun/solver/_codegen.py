@@ -4,9 +4,9 @@
 
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
 previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerations
-alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls spends
-its time in loop overhead; written out with the coefficients as literals, each stage
-is one pass over the balls. This script regenerates the section of ``_kernels.py``
+alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls
+spends its time in loop overhead; written out with the coefficients as literals, each
+stage is one pass over the balls. This script regenerates the section of ``_kernels.py``
 between the markers below from scipy's DOP853 tableau::
 
     python -m chainrun.solver._codegen          # rewrite the section
@@ -127,7 +127,8 @@ def generate(text: str) -> str:
         "",
         "    Per component e = |h| e5^2 / (sqrt(d) sc), d = e5^2 + e3^2 / 100; the largest",
         "    e^2 = h^2 e5^4 / (d sc^2) is kept as a fraction, so the loop takes no square",
-        "    root or division per ball. An infinite or NaN fraction is kept (it fails the step).",
+        "    root or division per ball. An infinite or NaN fraction is kept: it fails the",
+        "    step.",
         '    """',
         "    m = S.ints[I_M]",
         "    KV, X0, V0, X, V = S.KV, S.X0, S.V0, S.X, S.V",

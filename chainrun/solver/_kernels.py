@@ -101,7 +101,8 @@ State = namedtuple(
         "cst", "lvl", "stamp",
         # clusters: ball range, offset in the compact arrays, energy since the last change
         "clo", "chi", "coff", "cen",
-        # compact (integrated) balls
+        # compact (integrated) balls: state, step start, dense-stage positions (XS),
+        # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
@@ -340,7 +341,8 @@ def _error_norm(S, h):
 
     Per component e = |h| e5^2 / (sqrt(d) sc), d = e5^2 + e3^2 / 100; the largest
     e^2 = h^2 e5^4 / (d sc^2) is kept as a fraction, so the loop takes no square
-    root or division per ball. An infinite or NaN fraction is kept (it fails the step).
+    root or division per ball. An infinite or NaN fraction is kept: it fails the
+    step.
     """
     m = S.ints[I_M]
     KV, X0, V0, X, V = S.KV, S.X0, S.V0, S.X, S.V
