@@ -1480,7 +1480,9 @@ def _advance(S):
             S.fs[F_T] = t + hev
             S.ints[I_EVJ] = j
             S.ints[I_EVK] = kind
-            S.fs[F_H] = hnext
+            # not beyond the step just cut short: its error estimate spoke for a stretch
+            # that crossed the event, smoother than what follows it
+            S.fs[F_H] = min(hnext, h)
         else:
             S.fs[F_T] = tclip if clipped else t + h
             S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
