@@ -50,6 +50,20 @@ def draw_series(axes, data: AnalysisData, name: str, group: str = "series", **st
     return line
 
 
+def draw_loss_waves(data: AnalysisData, ylabel: str, legend_loc: str,
+                    legend_ncol: int = 1):
+    """One quantity against n at the times balls 10, 20, 30 and 40 lose contact
+    (figures 3 and 4), one line style per time."""
+    figure, ax = new_figure()
+    for name, style in zip(series_names(data, "data"), ("-", "--", "-.", ":")):
+        draw_series(ax, data, name, linestyle=style)
+    ax.set_xlabel(r"$n$")
+    ax.set_ylabel(ylabel)
+    ax.set_xlim(0.0, 50.0)
+    ax.legend(loc=legend_loc, ncol=legend_ncol)
+    return figure
+
+
 def draw_displacement_waves(data: AnalysisData, n_max: float):
     """Displacements x_n against n at several times, each curve labelled with its
     time at the foot of its wave front (figures 8, 10 and 11)."""

@@ -2,17 +2,8 @@
 
 from __future__ import annotations
 
-from chainrun.plotting.common import draw_series, new_figure, series_names
-
-LINESTYLES = ("-", "--", "-.", ":")
+from chainrun.plotting.common import draw_loss_waves
 
 
 def draw(data):
-    figure, ax = new_figure()
-    for name, style in zip(series_names(data, "data"), LINESTYLES):
-        draw_series(ax, data, name, linestyle=style)
-    ax.set_xlabel(r"$n$")
-    ax.set_ylabel(r"$\dot{x}_n$")
-    ax.set_xlim(0.0, 50.0)
-    ax.legend(loc="lower right", ncol=2)
-    return figure
+    return draw_loss_waves(data, r"$\dot{x}_n$", legend_loc="lower right", legend_ncol=2)
