@@ -28,9 +28,17 @@ TARGET = Path(__file__).with_name("_kernels.py")
 EPS = np.finfo(float).eps
 
 
-def _combo(coefs, rows: str, scale: str) -> str:
-    terms = [f"{float(a)!r} * {rows}[{i}, p]" for i, a in enumerate(coefs) if a != 0.0]
-    return f"{scale} * (" + " + ".join(terms) + ")"
+def _combo(coefs, rows: str, scale: str, index: str = "p") -> str:
+    """``scale * (coefs @ rows[:, index])`` as a sum of literal terms.
+
+    Entries below the rounding of the row's largest are left out: products of the
+    tableau give them where the exact entry is zero.
+    """
+    coefs = np.asarray(coefs, dtype=float)
+    cut = 64 * EPS * np.abs(coefs).max(initial=0.0)
+    terms = [f"{float(a)!r} * {rows}[{i}, {index}]" for i, a in enumerate(coefs)
+             if abs(a) > cut]
+    return f"{scale} * (" + " + ".join(terms) + ")" if terms else "0.0"
 
 
 def _force_pass(x: str, s: int) -> list[str]:
@@ -57,6 +65,20 @@ def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
         "    for p in range(m):",
         f"        {out_x}[p] = X0[p] + h * ({drift})",
         *_force_pass(out_x, s),
+    ]
+
+
+def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
+    """Extra stage s on the balls within ``reach`` of p (positions) and within
+    ``reach - 1`` (accelerations), inside p's cluster o..e."""
+    return [
+        f"    lo = max(o, p - {reach})",
+        f"    hi = min(e, p + {reach})",
+        "    for q in range(lo, hi + 1):",
+        f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
+        "    _forces(Xs, F, lo, hi, mode, alpha)",
+        "    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):",
+        f"        KV[{s}, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)",
     ]
 
 
@@ -162,21 +184,40 @@ def generate(text: str) -> str:
     ]
     for s in range(ns + 1, nse):
         lines += _stage_pass("Xs", s, C[s], AA[s, :s])
-    dx = _nystrom(dop.D)
     lines += [
         "",
         "",
         "@nb.njit(cache=True)",
-        "def _dense_rows(S):",
-        '    """Rows 3..6 of the interpolant: h * D @ K for positions and velocities."""',
-        "    m = S.ints[I_M]",
+        "def _dense_ball(S, p):",
+        '    """The three extra stages of the dense output at compact ball p alone.',
+        "",
+        "    Each stage's accelerations at a ball need its positions one ball further each",
+        "    way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is",
+        "    cut at the ends of p's cluster, where its forces stop.",
+        '    """',
+        "    mode = S.ints[I_MODE]",
+        "    alpha = S.fs[F_ALPHA]",
+        "    h = S.fs[F_HLAST]",
+        "    KV, X0, V0, Xs, F = S.KV, S.X0, S.V0, S.XS, S.FS",
+        "    c = _find_cluster(S, S.cb[p])",
+        "    o = S.coff[c]",
+        "    e = o + S.chi[c] - S.clo[c]",
+    ]
+    for s in range(ns + 1, nse):
+        lines += _band_pass(s, nse - s, C[s], AA[s, :s])
+    dx = _nystrom(dop.D)
+    lines += [
+        "",
+        "",
+        "@nb.njit(cache=True, inline=\"always\")",
+        "def _dense_rows(S, p):",
+        '    """Rows 3..6 of ball p\'s interpolant: h * D @ K for positions and velocities."""',
         "    h = S.fs[F_HLAST]",
         "    KV, FX, FV = S.KV, S.FX, S.FV",
-        "    for p in range(m):",
     ]
     for r in range(dop.D.shape[0]):
-        lines.append(f"        FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
-        lines.append(f"        FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
+        lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
+        lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
     lines += [
         "",
         "",

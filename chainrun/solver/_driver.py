@@ -73,7 +73,7 @@ def _alloc_window(cap: int) -> dict:
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
         FS=np.zeros(cap), KV=np.zeros((K._NSE, cap)),
-        FX=np.zeros((7, cap)), FV=np.zeros((7, cap)),
+        FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
     )
 
 

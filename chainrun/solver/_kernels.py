@@ -90,7 +90,7 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_NINT = range(21)
+    I_NSAME, I_DSTAMP, I_NINT = range(22)
 
 State = namedtuple(
     "State",
@@ -102,8 +102,9 @@ State = namedtuple(
         # clusters: ball range, offset in the compact arrays, energy since the last change
         "clo", "chi", "coff", "cen",
         # compact (integrated) balls: state, step start, dense-stage positions (XS),
-        # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV)
-        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV",
+        # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
+        # the stamp of the step they were built for (DM, see _dense_at)
+        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
         # event log buffer
@@ -323,7 +324,7 @@ def _stages(S, h):
             KV[11, p] = F[p - 1] - F[p]
         KV[11, e] = F[e - 1]
     for p in range(m):
-        X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 9.552663314695103e-17 * KV[3, p] + -2.5821006622138017e-17 * KV[4, p] + 2.9668752618349394 * KV[5, p] + 1.4186384244858752 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.060864379865006424 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
+        X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.9668752618349394 * KV[5, p] + 1.4186384244858752 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.060864379865006424 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
     for c in range(ncl):
         o = coff[c]
@@ -380,7 +381,7 @@ def _dense_stages(S):
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
-        Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776217 * KV[0, p] + 7.529536375142553e-17 * KV[3, p] + 1.2274326113744351e-17 * KV[4, p] + -0.4126700675361727 * KV[5, p] + -0.11888400830261207 * KV[6, p] + 0.5112504000718061 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.0031982003615129272 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
+        Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776217 * KV[0, p] + -0.4126700675361727 * KV[5, p] + -0.11888400830261207 * KV[6, p] + 0.5112504000718061 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.0031982003615129272 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
     for c in range(ncl):
         o = coff[c]
         e = o + chi[c] - clo[c]
@@ -390,7 +391,7 @@ def _dense_stages(S):
             KV[13, p] = F[p - 1] - F[p]
         KV[13, e] = F[e - 1]
     for p in range(m):
-        Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + 2.254579161363658e-18 * KV[3, p] + -1.21637208363202e-19 * KV[4, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
+        Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
     for c in range(ncl):
         o = coff[c]
         e = o + chi[c] - clo[c]
@@ -400,7 +401,7 @@ def _dense_stages(S):
             KV[14, p] = F[p - 1] - F[p]
         KV[14, e] = F[e - 1]
     for p in range(m):
-        Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.3588663399722558 * KV[0, p] + -1.167176980398028e-16 * KV[3, p] + 6.90124884893243e-17 * KV[4, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.02488248977172693 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
+        Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.3588663399722558 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.02488248977172693 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
     for c in range(ncl):
         o = coff[c]
         e = o + chi[c] - clo[c]
@@ -412,20 +413,56 @@ def _dense_stages(S):
 
 
 @nb.njit(cache=True)
-def _dense_rows(S):
-    """Rows 3..6 of the interpolant: h * D @ K for positions and velocities."""
-    m = S.ints[I_M]
+def _dense_ball(S, p):
+    """The three extra stages of the dense output at compact ball p alone.
+
+    Each stage's accelerations at a ball need its positions one ball further each
+    way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is
+    cut at the ends of p's cluster, where its forces stop.
+    """
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    h = S.fs[F_HLAST]
+    KV, X0, V0, Xs, F = S.KV, S.X0, S.V0, S.XS, S.FS
+    c = _find_cluster(S, S.cb[p])
+    o = S.coff[c]
+    e = o + S.chi[c] - S.clo[c]
+    lo = max(o, p - 3)
+    hi = min(e, p + 3)
+    for q in range(lo, hi + 1):
+        Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776217 * KV[0, q] + -0.4126700675361727 * KV[5, q] + -0.11888400830261207 * KV[6, q] + 0.5112504000718061 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.0031982003615129272 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
+    _forces(Xs, F, lo, hi, mode, alpha)
+    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+        KV[13, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+    lo = max(o, p - 2)
+    hi = min(e, p + 2)
+    for q in range(lo, hi + 1):
+        Xs[q] = X0[q] + h * (0.2 * V0[q] + h * (0.009887781381457055 * KV[0, q] + -0.00760250313479944 * KV[5, q] + 0.047423345887574166 * KV[6, q] + -0.0363790659291871 * KV[7, q] + -0.021320408140087014 * KV[8, q] + 0.026772748548590852 * KV[9, q] + 0.0013364963323445063 * KV[10, q] + 0.001054215711719072 * KV[11, q] + -0.0011726106576121006 * KV[12, q]))
+    _forces(Xs, F, lo, hi, mode, alpha)
+    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+        KV[14, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+    lo = max(o, p - 1)
+    hi = min(e, p + 1)
+    for q in range(lo, hi + 1):
+        Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.3588663399722558 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.02488248977172693 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
+    _forces(Xs, F, lo, hi, mode, alpha)
+    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+        KV[15, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+
+
+@nb.njit(cache=True, inline="always")
+def _dense_rows(S, p):
+    """Rows 3..6 of ball p's interpolant: h * D @ K for positions and velocities."""
     h = S.fs[F_HLAST]
     KV, FX, FV = S.KV, S.FX, S.FV
-    for p in range(m):
-        FX[3, p] = h * h * (2.861169879683012 * KV[0, p] + 2.1520899052958937e-15 * KV[3, p] + 4.2645463298117144e-16 * KV[4, p] + 30.512155838528837 * KV[5, p] + -24.612645088655494 * KV[6, p] + -35.41960917471137 * KV[7, p] + -3.8634586281383996 * KV[8, p] + 3.7761446592257824 * KV[9, p] + 0.5382666867527854 * KV[10, p] + 0.12984961919289312 * KV[11, p] + -0.14125972611089996 * KV[12, p] + -14.374598829726839 * KV[13, p] + 40.593984763959675 * KV[14, p])
-        FV[3, p] = h * (-8.428938276109013 * KV[0, p] + 0.5667149535193777 * KV[5, p] + -3.0689499459498917 * KV[6, p] + 2.38466765651207 * KV[7, p] + 2.117034582445028 * KV[8, p] + -0.871391583777973 * KV[9, p] + 2.2404374302607883 * KV[10, p] + 0.6315787787694688 * KV[11, p] + -0.08899033645133331 * KV[12, p] + 18.148505520854727 * KV[13, p] + -9.194632392478356 * KV[14, p] + -4.436036387594894 * KV[15, p])
-        FX[4, p] = h * h * (-17.921210306702967 * KV[0, p] + 1.6761393762113138e-14 * KV[3, p] + 1.5895201620159536e-15 * KV[4, p] + -124.22607870722852 * KV[5, p] + 273.13795938281214 * KV[6, p] + 96.31318087284055 * KV[7, p] + 27.684870153300388 * KV[8, p] + -29.055636475084693 * KV[9, p] + -3.0977069495595093 * KV[10, p] + 0.46259520639923596 * KV[11, p] + 0.2114704846299032 * KV[12, p] + 104.24898538523482 * KV[13, p] + -327.75842904664137 * KV[14, p])
-        FV[4, p] = h * (10.427508642579134 * KV[0, p] + 242.28349177525817 * KV[5, p] + 165.20045171727028 * KV[6, p] + -374.5467547226902 * KV[7, p] + -22.113666853125306 * KV[8, p] + 7.733432668472264 * KV[9, p] + -30.674084731089398 * KV[10, p] + -9.332130526430229 * KV[11, p] + 15.697238121770845 * KV[12, p] + -31.139403219565178 * KV[13, p] + -9.35292435884448 * KV[14, p] + 35.81684148639408 * KV[15, p])
-        FX[5, p] = h * h * (-8.999411590110817 * KV[0, p] + -7.483448681729084e-15 * KV[3, p] + -7.91953132648679e-15 * KV[4, p] + -250.14465065648486 * KV[5, p] + -7.345168174338192 * KV[6, p] + 324.41205855963244 * KV[7, p] + 1.3538496519789454 * KV[8, p] + 3.856666241020232 * KV[9, p] + -0.5618712467427652 * KV[10, p] + -0.5475191693050367 * KV[11, p] + 0.45402652434053137 * KV[12, p] + 47.262978033508965 * KV[13, p] + -109.74095817349945 * KV[14, p])
-        FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
-        FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 3.92171317034757e-14 * KV[3, p] + -4.984167106673781e-15 * KV[4, p] + 904.8218815202387 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631898 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188784 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
-        FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
+    FX[3, p] = h * h * (2.861169879683012 * KV[0, p] + 30.512155838528837 * KV[5, p] + -24.612645088655494 * KV[6, p] + -35.41960917471137 * KV[7, p] + -3.8634586281383996 * KV[8, p] + 3.7761446592257824 * KV[9, p] + 0.5382666867527854 * KV[10, p] + 0.12984961919289312 * KV[11, p] + -0.14125972611089996 * KV[12, p] + -14.374598829726839 * KV[13, p] + 40.593984763959675 * KV[14, p])
+    FV[3, p] = h * (-8.428938276109013 * KV[0, p] + 0.5667149535193777 * KV[5, p] + -3.0689499459498917 * KV[6, p] + 2.38466765651207 * KV[7, p] + 2.117034582445028 * KV[8, p] + -0.871391583777973 * KV[9, p] + 2.2404374302607883 * KV[10, p] + 0.6315787787694688 * KV[11, p] + -0.08899033645133331 * KV[12, p] + 18.148505520854727 * KV[13, p] + -9.194632392478356 * KV[14, p] + -4.436036387594894 * KV[15, p])
+    FX[4, p] = h * h * (-17.921210306702967 * KV[0, p] + -124.22607870722852 * KV[5, p] + 273.13795938281214 * KV[6, p] + 96.31318087284055 * KV[7, p] + 27.684870153300388 * KV[8, p] + -29.055636475084693 * KV[9, p] + -3.0977069495595093 * KV[10, p] + 0.46259520639923596 * KV[11, p] + 0.2114704846299032 * KV[12, p] + 104.24898538523482 * KV[13, p] + -327.75842904664137 * KV[14, p])
+    FV[4, p] = h * (10.427508642579134 * KV[0, p] + 242.28349177525817 * KV[5, p] + 165.20045171727028 * KV[6, p] + -374.5467547226902 * KV[7, p] + -22.113666853125306 * KV[8, p] + 7.733432668472264 * KV[9, p] + -30.674084731089398 * KV[10, p] + -9.332130526430229 * KV[11, p] + 15.697238121770845 * KV[12, p] + -31.139403219565178 * KV[13, p] + -9.35292435884448 * KV[14, p] + 35.81684148639408 * KV[15, p])
+    FX[5, p] = h * h * (-8.999411590110817 * KV[0, p] + -250.14465065648486 * KV[5, p] + -7.345168174338192 * KV[6, p] + 324.41205855963244 * KV[7, p] + 1.3538496519789454 * KV[8, p] + 3.856666241020232 * KV[9, p] + -0.5618712467427652 * KV[10, p] + -0.5475191693050367 * KV[11, p] + 0.45402652434053137 * KV[12, p] + 47.262978033508965 * KV[13, p] + -109.74095817349945 * KV[14, p])
+    FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
+    FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 904.8218815202387 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631898 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188784 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
+    FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
 
 
 @nb.njit(cache=True)
@@ -457,6 +494,7 @@ def _borrowed_state(S):
         _borrowed(S.KV),
         _borrowed(S.FX),
         _borrowed(S.FV),
+        _borrowed(S.DM),
         _borrowed(S.hp_t),
         _borrowed(S.hp_j),
         _borrowed(S.hp_s),
@@ -478,6 +516,7 @@ def _step(S, h):
     """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm."""
     m = S.ints[I_M]
     S.ints[I_DENSE] = 0
+    S.ints[I_DSTAMP] += 1
     _stages(S, h)
     for p in range(m):
         S.A[p] = S.KV[_NS, p]
@@ -490,26 +529,46 @@ def _step(S, h):
     return err
 
 
+@nb.njit(cache=True, inline="always")
+def _interp_rows(S, p):
+    """Rows 0..6 of compact ball p's interpolant (its dense stages are in KV)."""
+    h = S.fs[F_HLAST]
+    KV, FX, FV = S.KV, S.FX, S.FV
+    dx = S.X[p] - S.X0[p]
+    dv = S.V[p] - S.V0[p]
+    FX[0, p] = dx
+    FX[1, p] = h * S.V0[p] - dx
+    FX[2, p] = 2.0 * dx - h * (S.V[p] + S.V0[p])
+    FV[0, p] = dv
+    FV[1, p] = h * KV[0, p] - dv
+    FV[2, p] = 2.0 * dv - h * (KV[_NS, p] + KV[0, p])
+    _dense_rows(S, p)
+
+
 @nb.njit(cache=True)
 def _dense(S):
-    """Build the order-7 interpolant of the last accepted step (3 extra stages)."""
+    """Build the order-7 interpolant of the last accepted step for every ball."""
     if S.ints[I_DENSE] == 1:
         return
-    m = S.ints[I_M]
-    h = S.fs[F_HLAST]
-    KV, X0, V0, X, V, FX, FV = S.KV, S.X0, S.V0, S.X, S.V, S.FX, S.FV
     _dense_stages(S)
-    _dense_rows(S)
-    for p in range(m):
-        dx = X[p] - X0[p]
-        dv = V[p] - V0[p]
-        FX[0, p] = dx
-        FX[1, p] = h * V0[p] - dx
-        FX[2, p] = 2.0 * dx - h * (V[p] + V0[p])
-        FV[0, p] = dv
-        FV[1, p] = h * KV[0, p] - dv
-        FV[2, p] = 2.0 * dv - h * (KV[_NS, p] + KV[0, p])
+    for p in range(S.ints[I_M]):
+        _interp_rows(S, p)
     S.ints[I_DENSE] = 1
+
+
+@nb.njit(cache=True)
+def _dense_at(S, p):
+    """Build the interpolant of compact ball p alone, unless it is built already.
+
+    An event search asks for the two balls of a contact or so per step; the three
+    extra stages they need reach three balls each way (_dense_ball), so the cost does
+    not grow with the window.
+    """
+    if S.ints[I_DENSE] == 1 or S.DM[p] == S.ints[I_DSTAMP]:
+        return
+    _dense_ball(S, p)
+    _interp_rows(S, p)
+    S.DM[p] = S.ints[I_DSTAMP]
 
 
 @nb.njit(cache=True, inline="always")
@@ -524,13 +583,14 @@ def _poly(F, y0, p, th):
 # =========================================================================================
 @nb.njit(cache=True, inline="always")
 def _ball_at(S, b, th):
-    """(x, v) of ball b at t_prev + th * h_last (dense output needs _dense first)."""
+    """(x, v) of ball b at t_prev + th * h_last (its interpolant is built if need be)."""
     p = S.bmap[b]
     if p >= 0:
         if th >= 1.0:
             return S.X[p], S.V[p]
         if th <= 0.0:
             return S.X0[p], S.V0[p]
+        _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
     t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
@@ -893,6 +953,7 @@ def _rebuild(S):
     _rhs(S, S.X, S.A)
     S.ints[I_DIRTY] = 0
     S.ints[I_DENSE] = 0
+    S.ints[I_DSTAMP] += 1
     # balls that just lost their last contact may be on course to hit a free neighbour
     for i in range(S.ints[I_NFREED]):
         b = S.freed[i]
@@ -1001,7 +1062,6 @@ def _contact_event(S, j, hcap):
         lev2 = S.lvl[j]
     if not (_may_cross(c0, c1, reach, lev1) or _may_cross(c0, c1, reach, lev2)):
         return 2.0, 0, 0.0
-    _dense(S)
     floor = S.fs[F_FLOOR]
     ta = 0.0
     ca = c0
