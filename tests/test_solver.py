@@ -312,6 +312,50 @@ def test_tightest_tolerance_runs_to_the_end():
     assert sol.diagnostics.momentum_error < 1e-12
 
 
+def test_steps_over_an_event_land_on_it():
+    """A step over a contact's opening or closing fails its error test where the force
+    is not smooth; the solver lands on the event rather than shrinking the step until
+    it passes. Shrinking rejects 46% of the steps of this line."""
+    d = run(100, 5, 2.0).diagnostics
+    assert d.rejected_steps < 0.3 * d.steps
+
+
+def _stopped_state(n, k, alpha, t_end):
+    from chainrun.solver import _driver as D
+    from chainrun.solver import _kernels as K
+
+    S = D._new_state(n, k, alpha, 1e-12, t_end, None)
+    while True:
+        status = K.advance(S)
+        if status == K.ST_FLUSH:
+            S.ints[K.I_NEV] = 0
+        elif status == K.ST_GROW:
+            S = D._grow(S, int(S.ints[K.I_NEED]))
+        elif status != K.ST_YIELD:
+            return S
+
+
+@pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
+    (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0),  # one cluster; a 3-ball cluster and a long one
+])
+def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
+    """The event search builds the interpolant ball by ball, its extra stages on a band
+    of three balls each way cut at the cluster's ends: the same numbers as the whole."""
+    from chainrun.solver import _kernels as K
+
+    S = _stopped_state(n, k, alpha, t_end)
+    m = int(S.ints[K.I_M])
+    assert m > 0 and S.ints[K.I_JUMP] == 0
+    S.ints[K.I_DSTAMP] += 1  # forget what the run built
+    for p in range(m):
+        K._dense_at(S, p)
+    by_ball = S.FX[:, :m].copy(), S.FV[:, :m].copy()
+    S.ints[K.I_DENSE] = 0
+    K._dense(S)
+    np.testing.assert_array_equal(S.FX[:, :m], by_ball[0])
+    np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
+
+
 @pytest.mark.parametrize("alpha", [1.0, 1.5])
 def test_gap_closing_within_the_time_resolution(alpha):
     """Late in a long run t is resolved only to about 1e-12: two free balls whose gap

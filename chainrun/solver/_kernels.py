@@ -81,6 +81,9 @@ LEVEL_DORMANT = 1e-24
 LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
+#: the step after an event, as a fraction of the step that crossed it (measured on
+#: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
+AFTER_EVENT = 0.8
 YIELD_STEPS = 20000
 
 # ---- scalar slots ---------------------------------------------------------------------
@@ -1491,8 +1494,11 @@ def _advance(S):
             h = tclip - t
             clipped = True
         _save_start(S)
+        S.fs[F_TPREV] = t
+        S.ints[I_JUMP] = 0
         while True:
             err = _step(S, h)
+            S.fs[F_HLAST] = h
             if not np.isfinite(err):
                 if h < 1e-12 * max(1.0, abs(t)):
                     return ST_NON_FINITE
@@ -1500,18 +1506,20 @@ def _advance(S):
                 S.ints[I_REJ] += 1
                 clipped = False
                 continue
+            th, j, kind, lev = _find_event(S)
             if err <= 1.0:
                 break
             S.ints[I_REJ] += 1
+            if j >= 0:
+                # a step over a contact's change of state fails its error test where the
+                # force is not smooth; the event cuts the step anyway: go and land on it
+                # (the landing step passes the test, or is halved and retried)
+                break
             h *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
             clipped = False
             if h < 8.0 * EPS * max(1.0, abs(t)):
                 return ST_STEP_UNDERFLOW
         hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
-        S.fs[F_TPREV] = t
-        S.fs[F_HLAST] = h
-        S.ints[I_JUMP] = 0
-        th, j, kind, lev = _find_event(S)
         if j >= 0:
             # redo the step to end on the event, then refine by Newton on the step itself
             hev = th * h
@@ -1540,9 +1548,10 @@ def _advance(S):
             S.fs[F_T] = t + hev
             S.ints[I_EVJ] = j
             S.ints[I_EVK] = kind
-            # not beyond the step just cut short: its error estimate spoke for a stretch
-            # that crossed the event, smoother than what follows it
-            S.fs[F_H] = min(hnext, h)
+            # shorter than the step just cut short: its error estimate spoke for a
+            # stretch that crossed the event, smoother than what follows it (after a
+            # contact opens, the balls it leaves change fastest)
+            S.fs[F_H] = min(hnext, AFTER_EVENT * h)
         else:
             S.fs[F_T] = tclip if clipped else t + h
             S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
