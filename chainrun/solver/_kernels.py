@@ -1523,26 +1523,36 @@ def _advance(S):
         if j >= 0:
             # redo the step to end on the event, then refine by Newton on the step itself
             hev = th * h
-            good = True
-            for _ in range(6):
+            landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
+            nit = 0
+            while landing == 0:
                 if not (_step(S, hev) <= 1.0):
-                    good = False
+                    landing = 2
                     break
                 xl, vl, al = _end_ball(S, j, t + hev)
                 xr, vr, ar = _end_ball(S, j + 1, t + hev)
                 res = (xl - xr) - lev
                 w = vl - vr
                 if abs(res) <= _rounding(abs(xl) + abs(xr)) or w == 0.0:
+                    landing = 1
                     break
                 dh = -res / w
-                if abs(dh) > 0.5 * hev:
+                nit += 1
+                if abs(dh) > 0.5 * hev or nit == 6:
+                    landing = 3  # the state stays that of the last step taken
                     break
                 hev += dh
-            if not good:
+            if landing == 2:
                 # the shorter step failed its error test: halve it and look again
                 _restore_start(S)
                 S.fs[F_H] = 0.5 * hev
                 S.ints[I_REJ] += 1
+                continue
+            if landing == 3 and err > 1.0:
+                # an event seen only on a failed step, and not there on a good one:
+                # shrink the step as for any failed step
+                _restore_start(S)
+                S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / 8.0))
                 continue
             S.fs[F_HLAST] = hev
             S.fs[F_T] = t + hev
