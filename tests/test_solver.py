@@ -10,6 +10,7 @@ event, times are ordered, kinds alternate per contact.
 from __future__ import annotations
 
 import functools
+import math
 from decimal import Decimal
 
 import numpy as np
@@ -354,6 +355,87 @@ def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
     K._dense(S)
     np.testing.assert_array_equal(S.FX[:, :m], by_ball[0])
     np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
+
+
+def _window_rhs(S, alpha):
+    """The equations of the window's clusters, written anew with numpy: y = (x, v)."""
+    from chainrun.solver import _kernels as K
+
+    m = int(S.ints[K.I_M])
+    spans = [(int(S.coff[c]), int(S.coff[c] + S.chi[c] - S.clo[c]))
+             for c in range(int(S.ints[K.I_NCL]))]
+
+    def rhs(t, y):
+        x, a = y[:m], np.zeros(m)
+        for o, e in spans:
+            c = x[o:e] - x[o + 1:e + 1]
+            f = np.sign(c) * np.abs(c) ** alpha
+            a[o:e] -= f
+            a[o + 1:e + 1] += f
+        return np.concatenate([y[m:], a])
+
+    return rhs
+
+
+@pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
+    (60, 1, 1.5, 20.0), (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0), (40, 2, 2.3, 12.0),
+])
+def test_series_against_an_independent_integration(n, k, alpha, t_end):
+    """The Taylor series of a mid-run window, taken as long a step as it allows, lands
+    where scipy's DOP853 at its tightest tolerance does on the same clusters' equations."""
+    from scipy.integrate import solve_ivp
+
+    from chainrun.solver import _kernels as K
+
+    S = _stopped_state(n, k, alpha, t_end)
+    m = int(S.ints[K.I_M])
+    assert m > 0 and S.ints[K.I_JUMP] == 0
+    K._save_start(S)
+    h = K._taylor(S)
+    assert 0.0 < h < np.inf
+    S.ints[K.I_TAY] = 1
+    assert K._step(S, h) <= 1.0
+    y0 = np.concatenate([S.X0[:m], S.V0[:m]])
+    sol = solve_ivp(_window_rhs(S, alpha), (0.0, h), y0, method="DOP853",
+                    rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(S.X[:m], sol.y[:m, -1], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(S.V[:m], sol.y[m:, -1], rtol=0, atol=1e-11)
+    # and half-way, as the event search sees it
+    half = solve_ivp(_window_rhs(S, alpha), (0.0, 0.5 * h), y0, method="DOP853",
+                     rtol=1e-13, atol=1e-15).y[:, -1]
+    S.fs[K.F_HLAST] = h
+    for p in range(m):
+        x, v = K._taylor_at(S, p, 0.5 * h)
+        assert abs(x - half[p]) < 1e-11 and abs(v - half[m + p]) < 1e-11
+
+
+def test_bernstein_range_holds_the_polynomial():
+    """The bounds the event search trusts to skip a contact contain the polynomial."""
+    from chainrun.solver import _kernels as K
+
+    rng = np.random.default_rng(7)
+    order = np.arange(K.PT + 1)
+    scratch = np.zeros(K.PT + 1)
+    for _ in range(300):
+        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
+        h = rng.uniform(0.01, 1.5)
+        lo, hi = K._bernstein_range(T, h, scratch)
+        p = np.polynomial.polynomial.polyval(np.linspace(0.0, h, 4001), T)
+        assert lo <= p.min() and p.max() <= hi
+    # a compression decaying over 2.75 e-foldings in the step is seen to stay positive
+    decay = np.array([(-2.75) ** j / math.factorial(j) for j in order])
+    assert K._bernstein_range(decay, 1.0, scratch)[0] > 0.0
+
+
+def test_a_contact_pressed_and_opened_inside_one_step_is_located():
+    """On a linear line struck by one ball each contact opens once, in order along the
+    line. A series step is long enough for a contact engaged at the front to be pressed
+    and to open again inside it; that opening is located (kind OPEN), not found later
+    below zero and released."""
+    sol = run(200, 1, 1.0)
+    assert np.all(sol.event_kind == EventKind.OPEN)
+    np.testing.assert_array_equal(sol.event_contact, np.arange(199))
+    assert np.all(np.diff(sol.event_time) > 0)
 
 
 @pytest.mark.parametrize("alpha", [1.0, 1.5])

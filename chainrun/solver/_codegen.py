@@ -1,7 +1,5 @@
 """Writes the DOP853 stage loops of ``_kernels.py`` as straight-line code.
 
-(It also writes ``_borrowed_state``, which must name every field of ``State``.)
-
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
 previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerations
 alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls
@@ -15,7 +13,6 @@ between the markers below from scipy's DOP853 tableau::
 
 from __future__ import annotations
 
-import re
 import sys
 from pathlib import Path
 
@@ -106,19 +103,13 @@ def _nystrom(rows):
     return rows @ dop.A[:width, :width]
 
 
-def _state_fields(text: str) -> list[str]:
-    block = text[text.index("State = namedtuple("):]
-    block = block[block.index("[") : block.index("]")]
-    return re.findall(r'"(\w+)"', block)
-
-
-def generate(text: str) -> str:
+def generate() -> str:
     A, B, C = dop.A, dop.B, dop.C
     ns, nse = dop.N_STAGES, dop.N_STAGES_EXTENDED
     AA = A @ A  # stage positions: X0 + h C V0 + h^2 (A @ A) @ KV
     lines = [
         BEGIN,
-        "@nb.njit(cache=True)",
+        "@njit",
         "def _stages(S, h):",
         '    """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.',
         "",
@@ -143,7 +134,7 @@ def generate(text: str) -> str:
     lines += [
         "",
         "",
-        "@nb.njit(cache=True)",
+        "@njit",
         "def _error_norm(S, h):",
         '    """DOP853\'s error estimate of the last step, max over balls, scaled by the tolerance.',
         "",
@@ -175,7 +166,7 @@ def generate(text: str) -> str:
         "    return abs(h) * np.sqrt(num / den)",
         "",
         "",
-        "@nb.njit(cache=True)",
+        "@njit",
         "def _dense_stages(S):",
         '    """The three extra stages of the dense output (positions staged in XS)."""',
         *_PROLOGUE,
@@ -187,7 +178,7 @@ def generate(text: str) -> str:
     lines += [
         "",
         "",
-        "@nb.njit(cache=True)",
+        "@njit",
         "def _dense_ball(S, p):",
         '    """The three extra stages of the dense output at compact ball p alone.',
         "",
@@ -209,7 +200,7 @@ def generate(text: str) -> str:
     lines += [
         "",
         "",
-        "@nb.njit(cache=True, inline=\"always\")",
+        "@njit(inline=\"always\")",
         "def _dense_rows(S, p):",
         '    """Rows 3..6 of ball p\'s interpolant: h * D @ K for positions and velocities."""',
         "    h = S.fs[F_HLAST]",
@@ -218,16 +209,6 @@ def generate(text: str) -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
-    lines += [
-        "",
-        "",
-        "@nb.njit(cache=True)",
-        "def _borrowed_state(S):",
-        '    """The state with every array borrowed (see _borrowed)."""',
-        "    return State(",
-        *[f"        _borrowed(S.{f})," for f in _state_fields(text)],
-        "    )",
-    ]
     lines.append(END)
     return "\n".join(lines) + "\n"
 
@@ -240,7 +221,7 @@ def _splice(text: str, section: str) -> str:
 
 def main(argv: list[str]) -> int:
     text = TARGET.read_text()
-    new = _splice(text, generate(text))
+    new = _splice(text, generate())
     if "--check" in argv:
         if new != text:
             print(f"{TARGET} is out of date: run python -m chainrun.solver._codegen")

@@ -8,11 +8,15 @@ State model
 A ball is either *free* (no active contact; it moves as ``x + v (t - tref)``) or a
 member of a *cluster*, a maximal run of balls joined by active contacts. Only cluster
 balls are integrated: their state is packed, cluster after cluster, into compact
-arrays and advanced together by the explicit Runge-Kutta pair DOP853 (order 8, dense
-output of order 7). Between events the active set is fixed, so the right-hand side is
-smooth: an active contact carries ``f(c) = c |c|^(alpha-1)``, which is the force for
-``c > 0`` and its odd continuation beyond (for alpha = 1 exactly linear), so a step
-that ends on an opening sees no kink.
+arrays and advanced together. Between events the active set is fixed, so the
+right-hand side is smooth: an active contact carries ``f(c) = c |c|^(alpha-1)``, which
+is the force for ``c > 0`` and its odd continuation beyond (for alpha = 1 exactly
+linear), so a step that ends on an opening sees no kink. Each step is taken by the
+Taylor series of the motion to order PT (``_taylor``), whose steps are several times
+longer than those of a Runge-Kutta pair at the same tolerance and which is its own
+dense output; where the series does not exist or reaches less far (a contact closed
+just now, at compression exactly 0, is a branch point of c^alpha), by the explicit
+Runge-Kutta pair DOP853 (order 8, dense output of order 7).
 
 Contact states (``cst``)::
 
@@ -28,27 +32,49 @@ Events are located on the dense output by sampling each candidate contact at sev
 points of the step (an opening can re-close within one step) and bracketing the first
 crossing; the step is then redone from its start to end exactly at the root, refined
 by Newton on the step itself, so no accepted step ever crosses a non-smooth point.
+On a series step a contact is a candidate only if its level lies within the Bernstein
+bounds of its compression's series over the step.
 Free pairs approaching at >= floor are predicted analytically in a binary heap.
 
 References
 ----------
 E. Hairer, S. P. Norsett, G. Wanner, Solving Ordinary Differential Equations I,
 Sec. II.4-II.6 (DOP853, dense output, event location).
+A. Jorba, M. Zou, A software package for the numerical integration of ODEs by means
+of high-order Taylor methods, Experimental Mathematics 14 (2005) (Taylor series by
+recurrences, step size from the last terms).
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from collections import namedtuple
 
 import numba as nb
 import numpy as np
-from numba import types
-from numba.core import cgutils
-from numba.extending import intrinsic
+
+# Compiled without numba's reference counting (NRT): the kernels allocate nothing, and
+# every call that passes the state, some fifty arrays, would otherwise increment and
+# decrement the count of each (two out-of-line calls per array), which was most of
+# the cost of the many small calls of the event search.
+njit = functools.partial(nb.njit, cache=True, _nrt=False)
 
 # ---- DOP853 (its tableau is written into the stage code by _codegen) -----------------
 _NS = 12  # stages of the step proper; row 12 holds f at the step's end (FSAL)
 _NSE = 16  # with the three extra stages of the dense output
+# ---- Taylor series (see _taylor) -------------------------------------------------------
+PT = 20  # order of the series of x(t)
+# the series' steps keep their truncation estimate within this fraction of the
+# tolerance: an estimate from the last terms is not a bound, and DOP853's, which the
+# tolerance was set against, is pessimistic (its steps are far more accurate than it says)
+TAYLOR_TOL = 0.1
+# Bernstein coefficients on [0, 1] of a polynomial of degree DB from its power
+# coefficients, b_i = sum_k C(i, k) / C(DB, k) a_k, stored transposed (_BERN[k, i]);
+# the terms of a series beyond DB are bounded by the sum of their magnitudes
+DB = 10
+_BERN = np.array([[math.comb(i, k) / math.comb(DB, k) if k <= i else 0.0
+                   for i in range(DB + 1)] for k in range(DB + 1)])
 
 # ---- status codes returned by ``advance`` ---------------------------------------------
 ST_TERMINAL = 0
@@ -89,11 +115,11 @@ YIELD_STEPS = 20000
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
-    F_EPROJ, F_TSAME, F_NFLOAT = range(13)
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_NFLOAT = range(17)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_DSTAMP, I_NINT = range(22)
+    I_NSAME, I_DSTAMP, I_TAY, I_NINT = range(23)
 
 State = namedtuple(
     "State",
@@ -106,8 +132,11 @@ State = namedtuple(
         "clo", "chi", "coff", "cen",
         # compact (integrated) balls: state, step start, dense-stage positions (XS),
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
-        # the stamp of the step they were built for (DM, see _dense_at)
+        # the stamp of the step they were built for (DM, see _dense_at); the Taylor
+        # series of the positions (TX), compressions (TC) and forces (TU), ball-major,
+        # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
+        "TX", "TC", "TU", "TD", "TS",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
         # event log buffer
@@ -124,34 +153,10 @@ State = namedtuple(
 
 
 
-@intrinsic
-def _borrowed(typingctx, arr):
-    """A view of ``arr`` that does not own it: no reference counting on its use.
-
-    Every array handed to a compiled call is reference counted with an atomic
-    increment and decrement; with some forty arrays in the state, that was a third
-    of the run time. The driver holds the state for the whole ``advance`` call, so
-    views with a null meminfo are safe inside it.
-    """
-    if not isinstance(arr, types.Array):
-        return None
-
-    def codegen(context, builder, sig, args):
-        src = context.make_array(arr)(context, builder, value=args[0])
-        out = context.make_array(arr)(context, builder)
-        for name in ("nitems", "itemsize", "data", "shape", "strides"):
-            setattr(out, name, getattr(src, name))
-        out.meminfo = cgutils.get_null_value(out.meminfo.type)
-        out.parent = cgutils.get_null_value(out.parent.type)
-        return out._getvalue()
-
-    return arr(arr), codegen
-
-
 # =========================================================================================
 # forces
 # =========================================================================================
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _force(c, mode, alpha):
     if mode == 0:
         return c
@@ -163,7 +168,7 @@ def _force(c, mode, alpha):
         return c * abs(c) ** (alpha - 1.0)
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _forces(X, F, o, e, mode, alpha):
     """Forces of the contacts o..e-1 of one cluster at positions X into F[o:e].
 
@@ -180,7 +185,7 @@ def _forces(X, F, o, e, mode, alpha):
             F[p] = _force(X[p] - X[p + 1], mode, alpha)
 
 
-@nb.njit(cache=True)
+@njit
 def _rhs(S, Xs, out):
     """Accelerations of the compact balls at positions ``Xs`` into ``out``."""
     mode = S.ints[I_MODE]
@@ -200,7 +205,7 @@ def _rhs(S, Xs, out):
 # one DOP853 step for x'' = a(x), y = (x, v), f = (v, a)
 # =========================================================================================
 # ---- BEGIN GENERATED STAGES (python -m chainrun.solver._codegen) ----
-@nb.njit(cache=True)
+@njit
 def _stages(S, h):
     """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.
 
@@ -339,7 +344,7 @@ def _stages(S, h):
         KV[12, e] = F[e - 1]
 
 
-@nb.njit(cache=True)
+@njit
 def _error_norm(S, h):
     """DOP853's error estimate of the last step, max over balls, scaled by the tolerance.
 
@@ -373,7 +378,7 @@ def _error_norm(S, h):
     return abs(h) * np.sqrt(num / den)
 
 
-@nb.njit(cache=True)
+@njit
 def _dense_stages(S):
     """The three extra stages of the dense output (positions staged in XS)."""
     m = S.ints[I_M]
@@ -415,7 +420,7 @@ def _dense_stages(S):
         KV[15, e] = F[e - 1]
 
 
-@nb.njit(cache=True)
+@njit
 def _dense_ball(S, p):
     """The three extra stages of the dense output at compact ball p alone.
 
@@ -453,7 +458,7 @@ def _dense_ball(S, p):
         KV[15, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _dense_rows(S, p):
     """Rows 3..6 of ball p's interpolant: h * D @ K for positions and velocities."""
     h = S.fs[F_HLAST]
@@ -466,57 +471,256 @@ def _dense_rows(S, p):
     FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
     FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 904.8218815202387 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631898 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188784 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
     FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
-
-
-@nb.njit(cache=True)
-def _borrowed_state(S):
-    """The state with every array borrowed (see _borrowed)."""
-    return State(
-        _borrowed(S.bx),
-        _borrowed(S.bv),
-        _borrowed(S.bt),
-        _borrowed(S.sep_t),
-        _borrowed(S.sep_v),
-        _borrowed(S.bmap),
-        _borrowed(S.cst),
-        _borrowed(S.lvl),
-        _borrowed(S.stamp),
-        _borrowed(S.clo),
-        _borrowed(S.chi),
-        _borrowed(S.coff),
-        _borrowed(S.cen),
-        _borrowed(S.cb),
-        _borrowed(S.X),
-        _borrowed(S.V),
-        _borrowed(S.A),
-        _borrowed(S.X0),
-        _borrowed(S.V0),
-        _borrowed(S.A0),
-        _borrowed(S.XS),
-        _borrowed(S.FS),
-        _borrowed(S.KV),
-        _borrowed(S.FX),
-        _borrowed(S.FV),
-        _borrowed(S.DM),
-        _borrowed(S.hp_t),
-        _borrowed(S.hp_j),
-        _borrowed(S.hp_s),
-        _borrowed(S.ev_t),
-        _borrowed(S.ev_j),
-        _borrowed(S.ev_k),
-        _borrowed(S.ox),
-        _borrowed(S.ov),
-        _borrowed(S.freed),
-        _borrowed(S.jbuf),
-        _borrowed(S.fs),
-        _borrowed(S.ints),
-    )
 # ---- END GENERATED STAGES ----
 
 
-@nb.njit(cache=True)
+@njit(fastmath={"reassoc", "contract"})
+def _taylor(S):
+    """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
+
+    Between events the active set is fixed and the motion analytic, with a radius of
+    convergence set by the nearest complex time where a compression vanishes (about 3
+    time units inside a Hertz wave), so the series takes steps several times those of
+    DOP853 at the same tolerance, and is its own dense output. The series of the
+    accelerations follow from those of the positions: for f = c |c|^(alpha-1),
+    c f' = alpha c' f gives f_k = sum_{j=1..k} ((alpha+1) j - k) c_j f_{k-j} / (k c_0);
+    for alpha = 1, f = c (Jorba & Zou, see the module's references).
+
+    Returns the longest step whose truncation (estimated by the last two terms of x
+    and of v) is within TAYLOR_TOL of the tolerance, or 0 where the series does not
+    exist: a
+    compression exactly 0 (just closed) is a branch point of c^alpha, which DOP853
+    steps through.
+    """
+    m = S.ints[I_M]
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    TX, TC, TU = S.TX, S.TC, S.TU
+    X0, V0 = S.X0, S.V0
+    # ball-major, as TX: each sum of the recurrence runs over contiguous orders;
+    # the unused last column of TC holds 1 / c_0
+    for p in range(m):
+        TX[p, 0] = X0[p]
+        TX[p, 1] = V0[p]
+    a1 = alpha + 1.0
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        e = o + S.chi[c] - S.clo[c]
+        if mode != 0:
+            for p in range(o, e):
+                c0 = X0[p] - X0[p + 1]
+                if c0 == 0.0:
+                    return 0.0
+                TC[p, PT] = 1.0 / c0
+        for k in range(PT - 1):
+            if mode == 0:
+                for p in range(o, e):
+                    TU[p, k] = TX[p, k] - TX[p + 1, k]
+            elif k == 0:
+                for p in range(o, e):
+                    TC[p, 0] = X0[p] - X0[p + 1]
+                    TU[p, 0] = _force(TC[p, 0], mode, alpha)
+            else:
+                r = 1.0 / k
+                for p in range(o, e):
+                    ck = TX[p, k] - TX[p + 1, k]
+                    TC[p, k] = ck
+                    acc = (a1 * k - k) * ck * TU[p, 0]
+                    for j in range(1, k):
+                        acc += (a1 * j - k) * TC[p, j] * TU[p, k - j]
+                    TU[p, k] = acc * TC[p, PT] * r
+            s = 1.0 / ((k + 1) * (k + 2))
+            TX[o, k + 2] = -TU[o, k] * s
+            for p in range(o + 1, e):
+                TX[p, k + 2] = (TU[p - 1, k] - TU[p, k]) * s
+            TX[e, k + 2] = TU[e - 1, k] * s
+    # truncation: the last two terms of x and of v against the tolerance of each ball
+    tol = TAYLOR_TOL * S.fs[F_TOL]
+    qx1 = 0.0
+    qx2 = 0.0
+    for p in range(m):
+        qx1 = max(qx1, abs(TX[p, PT]) / (tol + 64.0 * EPS * abs(X0[p])))
+        qx2 = max(qx2, abs(TX[p, PT - 1]) / (tol + 64.0 * EPS * abs(X0[p])))
+    qv1 = 0.0
+    qv2 = 0.0
+    for p in range(m):
+        qv1 = max(qv1, PT * abs(TX[p, PT]) / (tol + 64.0 * EPS * abs(V0[p])))
+        qv2 = max(qv2, (PT - 1) * abs(TX[p, PT - 1]) / (tol + 64.0 * EPS * abs(V0[p])))
+    if not (qx1 < np.inf and qx2 < np.inf and qv1 < np.inf and qv2 < np.inf):
+        return 0.0
+    S.fs[F_QX1] = qx1
+    S.fs[F_QX2] = qx2
+    S.fs[F_QV1] = qv1
+    S.fs[F_QV2] = qv2
+    h = np.inf
+    if qx1 > 0.0:
+        h = min(h, qx1 ** (-1.0 / PT))
+    if qx2 > 0.0:
+        h = min(h, qx2 ** (-1.0 / (PT - 1)))
+    if qv1 > 0.0:
+        h = min(h, qv1 ** (-1.0 / (PT - 1)))
+    if qv2 > 0.0:
+        h = min(h, qv2 ** (-1.0 / (PT - 2)))
+    return 0.9 * h
+
+
+@njit(inline="always")
+def _taylor_at(S, p, s):
+    """(x, v) of compact ball p at time s after the step's start, from its series."""
+    T = S.TX
+    x = T[p, PT]
+    v = PT * T[p, PT]
+    for k in range(PT - 1, 0, -1):
+        x = x * s + T[p, k]
+        v = v * s + k * T[p, k]
+    return x * s + T[p, 0], v
+
+
+@njit
+def _taylor_step(S, h):
+    """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance."""
+    m = S.ints[I_M]
+    for p in range(m):
+        S.X[p], S.V[p] = _taylor_at(S, p, h)
+    _rhs(S, S.X, S.A)
+    for p in range(m):
+        if not (np.isfinite(S.X[p]) and np.isfinite(S.V[p])):
+            return np.inf
+    h1 = abs(h) ** (PT - 2)
+    return max(S.fs[F_QX1] * h1 * h * h, S.fs[F_QX2] * h1 * h,
+               S.fs[F_QV1] * h1 * h, S.fs[F_QV2] * h1)
+
+
+@njit(inline="always")
+def _series_at(T, s):
+    """The polynomial sum_k T[k] s^k (Horner)."""
+    y = T[PT]
+    for k in range(PT - 1, -1, -1):
+        y = y * s + T[k]
+    return y
+
+
+@njit
+def _contact_series(S, j):
+    """The series of contact j's compression over the last (series) step into TD.
+
+    A free ball's series is its straight line.
+    """
+    pa = S.bmap[j]
+    pb = S.bmap[j + 1]
+    TD, TX = S.TD, S.TX
+    t0 = S.fs[F_TPREV]
+    for k in range(PT + 1):
+        TD[k] = 0.0
+    if pa >= 0:
+        for k in range(PT + 1):
+            TD[k] = TX[pa, k]
+    else:
+        TD[0] = S.bx[j] + S.bv[j] * (t0 - S.bt[j])
+        TD[1] = S.bv[j]
+    if pb >= 0:
+        for k in range(PT + 1):
+            TD[k] -= TX[pb, k]
+    else:
+        TD[0] -= S.bx[j + 1] + S.bv[j + 1] * (t0 - S.bt[j + 1])
+        TD[1] -= S.bv[j + 1]
+
+
+@njit
+def _sample_series(S, ns, h):
+    """TD's polynomial at s = h (i + 1) / ns, i < ns, into TS[1] (TS[0]: the s).
+
+    All samples at once: independent Horner chains, which vectorise.
+    """
+    SS, YS, TD = S.TS[0], S.TS[1], S.TD
+    for i in range(ns):
+        SS[i] = (i + 1) / ns * h
+        YS[i] = TD[PT]
+    for k in range(PT - 1, -1, -1):
+        tk = TD[k]
+        for i in range(ns):
+            YS[i] = YS[i] * SS[i] + tk
+
+
+@njit
+def _pressed_in_step(S, j):
+    """Whether fresh contact j was pressed beyond eps_rel inside the last series step."""
+    h = S.fs[F_HLAST]
+    epsrel = S.fs[F_EPSREL]
+    _contact_series(S, j)
+    if _bernstein_range(S.TD, h, S.TS[0])[1] <= epsrel:
+        return False
+    ns = 4 * N_SAMPLES
+    _sample_series(S, ns, h)
+    for i in range(ns):
+        if S.TS[1, i] > epsrel:
+            return True
+    return False
+
+
+@njit
+def _bernstein_range(T, h, B):
+    """Bounds of the polynomial sum_k T[k] s^k over s in [0, h] (B: scratch).
+
+    The smallest and largest Bernstein coefficients of its terms up to degree DB
+    (the values at the ends are the first and last), widened by the magnitude of the
+    higher terms and by rounding. (R. T. Farouki, Computer Aided Geometric Design 29,
+    2012: the Bernstein polynomial basis, a centennial retrospective.)
+    """
+    for i in range(DB + 1):
+        B[i] = 0.0
+    hk = 1.0
+    tot = 0.0
+    for k in range(DB + 1):
+        a = T[k] * hk
+        tot += abs(a)
+        hk *= h
+        for i in range(k, DB + 1):
+            B[i] += _BERN[k, i] * a
+    tail = 0.0
+    for k in range(DB + 1, PT + 1):
+        tail += abs(T[k]) * hk
+        hk *= h
+    lo = np.inf
+    hi = -np.inf
+    for i in range(DB + 1):
+        lo = min(lo, B[i])
+        hi = max(hi, B[i])
+    r = tail + 64.0 * EPS * tot
+    return lo - r, hi + r
+
+
+@njit
+def _curvature_bound(S, j):
+    """A bound on |c''| of contact j over the last step.
+
+    For a Taylor step, the sum of the absolute terms of the series of c'' (rigorous);
+    for a DOP853 step, the larger of |c''| at its two ends (the step is short).
+    """
+    pa = S.bmap[j]
+    pb = S.bmap[j + 1]
+    if S.ints[I_TAY] == 1:
+        h = S.fs[F_HLAST]
+        g = 0.0
+        hk = 1.0
+        for k in range(2, PT + 1):
+            d = (S.TX[pa, k] if pa >= 0 else 0.0) - (S.TX[pb, k] if pb >= 0 else 0.0)
+            g += k * (k - 1) * abs(d) * hk
+            hk *= h
+        return g
+    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
+    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
+    return max(abs(g0), abs(g1))
+
+
+@njit
 def _step(S, h):
-    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm."""
+    """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm.
+
+    By the series if this step's start chose it (I_TAY), else by DOP853.
+    """
+    if S.ints[I_TAY] == 1:
+        return _taylor_step(S, h)
     m = S.ints[I_M]
     S.ints[I_DENSE] = 0
     S.ints[I_DSTAMP] += 1
@@ -532,7 +736,7 @@ def _step(S, h):
     return err
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _interp_rows(S, p):
     """Rows 0..6 of compact ball p's interpolant (its dense stages are in KV)."""
     h = S.fs[F_HLAST]
@@ -548,7 +752,7 @@ def _interp_rows(S, p):
     _dense_rows(S, p)
 
 
-@nb.njit(cache=True)
+@njit
 def _dense(S):
     """Build the order-7 interpolant of the last accepted step for every ball."""
     if S.ints[I_DENSE] == 1:
@@ -559,7 +763,7 @@ def _dense(S):
     S.ints[I_DENSE] = 1
 
 
-@nb.njit(cache=True)
+@njit
 def _dense_at(S, p):
     """Build the interpolant of compact ball p alone, unless it is built already.
 
@@ -574,7 +778,7 @@ def _dense_at(S, p):
     S.DM[p] = S.ints[I_DSTAMP]
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _poly(F, y0, p, th):
     u = 1.0 - th
     return y0 + th * (F[0, p] + u * (F[1, p] + th * (F[2, p] + u * (F[3, p] + th * (
@@ -584,7 +788,7 @@ def _poly(F, y0, p, th):
 # =========================================================================================
 # positions of any ball inside the last step (theta in [0, 1]) or now
 # =========================================================================================
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _ball_at(S, b, th):
     """(x, v) of ball b at t_prev + th * h_last (its interpolant is built if need be)."""
     p = S.bmap[b]
@@ -593,13 +797,15 @@ def _ball_at(S, b, th):
             return S.X[p], S.V[p]
         if th <= 0.0:
             return S.X0[p], S.V0[p]
+        if S.ints[I_TAY] == 1:
+            return _taylor_at(S, p, th * S.fs[F_HLAST])
         _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
     t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _ball_now(S, b):
     p = S.bmap[b]
     if p >= 0:
@@ -610,7 +816,7 @@ def _ball_now(S, b):
 # =========================================================================================
 # heap of free-pair collisions (lazy invalidation by per-contact stamps)
 # =========================================================================================
-@nb.njit(cache=True)
+@njit
 def _heap_push(S, t, j):
     n = S.ints[I_NHEAP]
     if n >= S.hp_t.shape[0]:
@@ -631,14 +837,14 @@ def _heap_push(S, t, j):
         i = q
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _heap_swap(S, a, b):
     S.hp_t[a], S.hp_t[b] = S.hp_t[b], S.hp_t[a]
     S.hp_j[a], S.hp_j[b] = S.hp_j[b], S.hp_j[a]
     S.hp_s[a], S.hp_s[b] = S.hp_s[b], S.hp_s[a]
 
 
-@nb.njit(cache=True)
+@njit
 def _heap_pop(S):
     n = S.ints[I_NHEAP] - 1
     S.ints[I_NHEAP] = n
@@ -660,7 +866,7 @@ def _heap_pop(S):
         i = c
 
 
-@nb.njit(cache=True)
+@njit
 def _heap_valid_top(S):
     """Drop stale entries; return whether a valid entry is on top."""
     while S.ints[I_NHEAP] > 0:
@@ -671,7 +877,7 @@ def _heap_valid_top(S):
     return False
 
 
-@nb.njit(cache=True)
+@njit
 def _heap_compact(S):
     n = S.ints[I_NHEAP]
     k = 0
@@ -700,7 +906,7 @@ def _heap_compact(S):
             q = c
 
 
-@nb.njit(cache=True)
+@njit
 def _schedule_pair(S, j):
     """Predict the collision of free balls j, j+1 if they approach at >= floor."""
     if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
@@ -719,7 +925,7 @@ def _schedule_pair(S, j):
 # =========================================================================================
 # cluster bookkeeping (the list is sorted by lo and small)
 # =========================================================================================
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _find_cluster(S, b):
     lo = 0
     hi = S.ints[I_NCL] - 1
@@ -734,7 +940,7 @@ def _find_cluster(S, b):
     return -1
 
 
-@nb.njit(cache=True)
+@njit
 def _sync(S):
     """Write the compact state back to the balls (all at the current time).
 
@@ -750,7 +956,7 @@ def _sync(S):
         S.bt[b] = t
 
 
-@nb.njit(cache=True)
+@njit
 def _remove_cluster(S, c):
     n = S.ints[I_NCL]
     for i in range(c, n - 1):
@@ -759,7 +965,7 @@ def _remove_cluster(S, c):
     S.ints[I_NCL] = n - 1
 
 
-@nb.njit(cache=True)
+@njit
 def _insert_cluster(S, lo, hi):
     n = S.ints[I_NCL]
     if n >= S.clo.shape[0]:
@@ -775,7 +981,7 @@ def _insert_cluster(S, lo, hi):
     return True
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _touch_ball(S, b):
     """Invalidate predictions involving ball b."""
     if b - 1 >= 0:
@@ -784,7 +990,7 @@ def _touch_ball(S, b):
         S.stamp[b] += 1
 
 
-@nb.njit(cache=True)
+@njit
 def _free_ball(S, b):
     S.sep_t[b] = S.fs[F_T]
     S.sep_v[b] = S.bv[b]
@@ -796,7 +1002,7 @@ def _free_ball(S, b):
         S.ints[I_NFREED] = n + 1
 
 
-@nb.njit(cache=True)
+@njit
 def _activate(S, j, state):
     """Make contact j active, joining the clusters/balls on both sides."""
     S.cst[j] = state
@@ -820,7 +1026,7 @@ def _activate(S, j, state):
     return ok
 
 
-@nb.njit(cache=True)
+@njit
 def _deactivate(S, j, level):
     """Make contact j inactive (engages again beyond ``level``), splitting its cluster."""
     S.cst[j] = OPEN
@@ -844,7 +1050,7 @@ def _deactivate(S, j, level):
     return ok
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _potential(c, mode, alpha):
     """|c|^(alpha+1)/(alpha+1): the energy of an active contact's (odd-continued) force."""
     a = abs(c)
@@ -855,7 +1061,7 @@ def _potential(c, mode, alpha):
     return a ** (alpha + 1.0) / (alpha + 1.0)
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _mean_velocity(S, o, e):
     u = 0.0
     for p in range(o, e + 1):
@@ -863,7 +1069,7 @@ def _mean_velocity(S, o, e):
     return u / (e - o + 1)
 
 
-@nb.njit(cache=True)
+@njit
 def _cluster_energy(S, c):
     """Internal energy of cluster c: kinetic energy about its mean velocity plus potential.
 
@@ -884,7 +1090,7 @@ def _cluster_energy(S, c):
     return en
 
 
-@nb.njit(cache=True)
+@njit
 def _project_energy(S):
     """Restore each cluster's internal energy, conserved exactly between changes of structure.
 
@@ -927,7 +1133,7 @@ def _project_energy(S):
                 S.V[p] = us + lam * (S.V[p] - us)
 
 
-@nb.njit(cache=True)
+@njit
 def _rebuild(S):
     """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
     ncl = S.ints[I_NCL]
@@ -969,7 +1175,7 @@ def _rebuild(S):
 # =========================================================================================
 # events
 # =========================================================================================
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _log(S, t, j, kind):
     n = S.ints[I_NEV]
     S.ev_t[n] = t
@@ -979,14 +1185,14 @@ def _log(S, t, j, kind):
     S.ints[I_EVTOTAL] += 1
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _contact_at(S, j, th):
     xl, vl = _ball_at(S, j, th)
     xr, vr = _ball_at(S, j + 1, th)
     return xl - xr, vl - vr, abs(xl) + abs(xr)
 
 
-@nb.njit(cache=True)
+@njit
 def _crossing(S, j, ta, tb, ca, cb_, level):
     """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi."""
     fa = ca - level
@@ -1018,17 +1224,17 @@ def _crossing(S, j, ta, tb, ca, cb_, level):
     return tb
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _rounding(scale):
     return 16.0 * EPS * max(1.0, scale)
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _may_cross(c0, c1, reach, level):
     return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
 
 
-@nb.njit(cache=True)
+@njit
 def _contact_event(S, j, hcap):
     """Earliest event of contact j in the last step before ``hcap``.
 
@@ -1036,21 +1242,20 @@ def _contact_event(S, j, hcap):
     crossing was found; the caller sets the contact's new state from it.
     """
     st = S.cst[j]
-    c0, w0, s0 = _contact_at(S, j, 0.0)
-    c1, w1, s1 = _contact_at(S, j, 1.0)
-    # how far c can stray from its end values inside the step: h^2/8 max|c''|, with
-    # c'' taken at both ends and a safety factor of 2
-    pa = S.bmap[j]
-    pb = S.bmap[j + 1]
-    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
-    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
-    h = S.fs[F_HLAST]
-    reach = 0.25 * h * h * max(abs(g0), abs(g1))
-    if st == FRESH:
+    tay = S.ints[I_TAY] == 1
+    if st == FRESH and not tay:
         # never pressed beyond eps_rel: its force is below the floor, so it is checked
         # at the step's end (_release_quiet), like a dormant contact
         return 2.0, 0, 0.0
-    if st == ACTIVE:
+    c0, w0, s0 = _contact_at(S, j, 0.0)
+    c1, w1, s1 = _contact_at(S, j, 1.0)
+    h = S.fs[F_HLAST]
+    if st == FRESH:
+        # a series step is long enough for a fresh contact to be pressed beyond
+        # eps_rel and to open again inside it: that opening is located
+        lev1 = S.fs[F_EPSREL]
+        lev2 = lev1
+    elif st == ACTIVE:
         lev1 = 0.0
         lev2 = 0.0
     elif st == DORMANT:
@@ -1063,19 +1268,45 @@ def _contact_event(S, j, hcap):
     else:
         lev1 = 0.0
         lev2 = S.lvl[j]
-    if not (_may_cross(c0, c1, reach, lev1) or _may_cross(c0, c1, reach, lev2)):
-        return 2.0, 0, 0.0
+    if tay:
+        # the series of c over the step lies within the hull of its Bernstein
+        # coefficients: a level outside it is not reached
+        _contact_series(S, j)
+        blo, bhi = _bernstein_range(S.TD, h, S.TS[0])
+        if not (blo <= lev1 <= bhi or blo <= lev2 <= bhi):
+            return 2.0, 0, 0.0
+    else:
+        # how far c can stray from its end values inside the step: h^2/8 max|c''|,
+        # with c'' taken at both ends and a safety factor of 2
+        reach = 0.25 * h * h * _curvature_bound(S, j)
+        if not (_may_cross(c0, c1, reach, lev1) or _may_cross(c0, c1, reach, lev2)):
+            return 2.0, 0, 0.0
     floor = S.fs[F_FLOOR]
+    # a series step is several DOP853 steps long: sample it as finely, on the series
+    # of c itself (TD)
+    ns = 4 * N_SAMPLES if tay else N_SAMPLES
+    if tay:
+        _sample_series(S, ns, h)
+    pressed = c0 > lev1  # (a fresh contact's press beyond eps_rel)
     ta = 0.0
     ca = c0
-    for i in range(1, N_SAMPLES + 1):
-        tb = i / N_SAMPLES
+    for i in range(1, ns + 1):
+        tb = i / ns
         if tb >= hcap:
             tb = hcap
-        cb_ = c1 if tb >= 1.0 else _contact_at(S, j, tb)[0]
+        if tb >= 1.0:
+            cb_ = c1
+        elif tay:
+            cb_ = S.TS[1, i - 1] if tb == i / ns else _series_at(S.TD, tb * h)
+        else:
+            cb_ = _contact_at(S, j, tb)[0]
         if st == ACTIVE:
             if ca > lev1 and cb_ <= lev1:
                 return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_OPEN, lev1
+        elif st == FRESH:
+            if pressed and ca > 0.0 and cb_ <= 0.0:
+                return _crossing(S, j, ta, tb, ca, cb_, 0.0), EV_OPEN, 0.0
+            pressed = pressed or cb_ > lev1
         elif st == DORMANT:
             if ca < lev1 and cb_ >= lev1:
                 return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_ENGAGE, lev1
@@ -1095,17 +1326,7 @@ def _contact_event(S, j, hcap):
     return 2.0, 0, 0.0
 
 
-@nb.njit(cache=True, inline="always")
-def _gap_curvature(S, j):
-    """max |c''| of contact j at the two ends of the last step."""
-    pa = S.bmap[j]
-    pb = S.bmap[j + 1]
-    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
-    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
-    return max(abs(g0), abs(g1))
-
-
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
 
@@ -1125,7 +1346,7 @@ def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     return False
 
 
-@nb.njit(cache=True)
+@njit
 def _find_event(S):
     """Scan the contacts touching clusters for the earliest event of the last step."""
     best = 2.0
@@ -1135,6 +1356,7 @@ def _find_event(S):
     ncont = S.cst.shape[0]
     h = S.fs[F_HLAST]
     q = 0.25 * h * h
+    tay = S.ints[I_TAY] == 1
     X, X0, A, A0 = S.X, S.X0, S.A, S.A0
     for c in range(S.ints[I_NCL]):
         lo = S.clo[c]
@@ -1145,7 +1367,12 @@ def _find_event(S):
                 continue
             st = S.cst[j]
             if st == FRESH:
-                continue  # checked at the step's end (_release_quiet)
+                if not tay:
+                    continue  # checked at the step's end (_release_quiet)
+                c0 = _contact_at(S, j, 0.0)[0]
+                c1 = _contact_at(S, j, 1.0)[0]
+                if max(c0, c1) + q * _curvature_bound(S, j) < S.fs[F_EPSREL]:
+                    continue  # never pressed beyond eps_rel in this step
             if st == DORMANT or st == OPEN:
                 # quick rejections; the general path below repeats them exactly
                 cq0 = _contact_at(S, j, 0.0)[0]
@@ -1153,20 +1380,24 @@ def _find_event(S):
                 if st == DORMANT:
                     if cq1 < LEVEL_LOCATE:
                         continue
-                elif max(cq0, cq1) + q * _gap_curvature(S, j) < 0.0:
+                elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
                     continue  # stays open: below both of its levels (0 and lvl > 0)
             if j >= lo and j < S.chi[c] and st == ACTIVE:
                 # fast path, an internal active contact: can it reach zero in this step?
                 p = o + j
                 c0 = X0[p] - X0[p + 1]
                 c1 = X[p] - X[p + 1]
-                g0 = A0[p] - A0[p + 1]
-                g1 = A[p] - A[p + 1]
-                if min(c0, c1) > q * max(abs(g0), abs(g1)):
-                    continue
-                if _stays_positive(c0, c1, S.V0[p] - S.V0[p + 1], S.V[p] - S.V[p + 1],
-                                   g0, g1, h):
-                    continue
+                if tay:
+                    if min(c0, c1) > q * _curvature_bound(S, j):
+                        continue
+                else:
+                    g0 = A0[p] - A0[p + 1]
+                    g1 = A[p] - A[p + 1]
+                    if min(c0, c1) > q * max(abs(g0), abs(g1)):
+                        continue
+                    if _stays_positive(c0, c1, S.V0[p] - S.V0[p + 1],
+                                       S.V[p] - S.V[p + 1], g0, g1, h):
+                        continue
             th, kind, lev = _contact_event(S, j, best)
             if th < best:
                 best = th
@@ -1179,7 +1410,7 @@ def _find_event(S):
 # =========================================================================================
 # the step loop
 # =========================================================================================
-@nb.njit(cache=True)
+@njit
 def _save_start(S):
     for p in range(S.ints[I_M]):
         S.X0[p] = S.X[p]
@@ -1187,7 +1418,7 @@ def _save_start(S):
         S.A0[p] = S.A[p]
 
 
-@nb.njit(cache=True)
+@njit
 def _restore_start(S):
     for p in range(S.ints[I_M]):
         S.X[p] = S.X0[p]
@@ -1195,7 +1426,7 @@ def _restore_start(S):
         S.A[p] = S.A0[p]
 
 
-@nb.njit(cache=True)
+@njit
 def _snapshot(S, tout):
     """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
     t = S.fs[F_T]
@@ -1206,13 +1437,16 @@ def _snapshot(S, tout):
         th = (tout - tp) / hl
         if th < 0.0:
             th = 0.0
-        _dense(S)
+        if S.ints[I_TAY] == 0:
+            _dense(S)
     for b in range(S.bx.shape[0]):
         p = S.bmap[b]
         if p >= 0:
             if th >= 1.0:
                 S.ox[b] = S.X[p]
                 S.ov[b] = S.V[p]
+            elif S.ints[I_TAY] == 1:
+                S.ox[b], S.ov[b] = _taylor_at(S, p, th * hl)
             else:
                 S.ox[b] = _poly(S.FX, S.X0[p], p, th)
                 S.ov[b] = _poly(S.FV, S.V0[p], p, th)
@@ -1221,7 +1455,7 @@ def _snapshot(S, tout):
             S.ov[b] = S.bv[b]
 
 
-@nb.njit(cache=True)
+@njit
 def _engage_level(S, j):
     """Compression beyond which contact j, made inactive now, engages again.
 
@@ -1235,7 +1469,7 @@ def _engage_level(S, j):
     return max(xl - xr, 0.0) + max(S.fs[F_EPSREL], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
-@nb.njit(cache=True)
+@njit
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
@@ -1253,7 +1487,7 @@ def _apply_event(S, j, kind):
     return ok
 
 
-@nb.njit(cache=True)
+@njit
 def _release_quiet(S):
     """Season contacts pressed beyond eps_rel; release those below the floor.
 
@@ -1266,6 +1500,7 @@ def _release_quiet(S):
     floor = S.fs[F_FLOOR]
     epsrel = S.fs[F_EPSREL]
     alpha = S.fs[F_ALPHA]
+    tay = S.ints[I_TAY] == 1 and S.ints[I_JUMP] == 0
     nrel = 0
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
@@ -1277,6 +1512,8 @@ def _release_quiet(S):
             if st == FRESH:
                 if cj > epsrel:
                     S.cst[j] = ACTIVE
+                elif tay and _pressed_in_step(S, j):
+                    S.cst[j] = ACTIVE  # pressed beyond eps_rel inside the step
                 elif cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
                     S.jbuf[nrel] = j
                     nrel += 1
@@ -1300,7 +1537,7 @@ def _release_quiet(S):
     return True
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _due(S, j):
     """The event contact j is due at this instant, if its state disagrees with its motion.
 
@@ -1339,7 +1576,7 @@ def _due(S, j):
     return 0
 
 
-@nb.njit(cache=True)
+@njit
 def _dormant_due(S):
     """Whether a dormant contact at a cluster's edge has been pressed (or pulled) past its levels."""
     ncont = S.cst.shape[0]
@@ -1355,7 +1592,7 @@ def _dormant_due(S):
     return False
 
 
-@nb.njit(cache=True)
+@njit
 def _settle(S):
     """After a change of structure, apply every event due at this instant (positions synced)."""
     ncont = S.cst.shape[0]
@@ -1381,7 +1618,7 @@ def _settle(S):
     return True
 
 
-@nb.njit(cache=True)
+@njit
 def _post_step(S):
     """After an accepted step or jump: apply its event, or season and release contacts."""
     k = S.ints[I_EVK]
@@ -1401,7 +1638,7 @@ def _post_step(S):
     return True
 
 
-@nb.njit(cache=True, inline="always")
+@njit(inline="always")
 def _end_ball(S, b, t):
     p = S.bmap[b]
     if p >= 0:
@@ -1409,17 +1646,8 @@ def _end_ball(S, b, t):
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b], 0.0
 
 
-@nb.njit(cache=True)
+@njit
 def advance(S):
-    """Run until something needs the driver; return a status code (ST_*).
-
-    See ``_advance``; the state's arrays are used through borrowed views.
-    """
-    return _advance(_borrowed_state(S))
-
-
-@nb.njit(cache=True)
-def _advance(S):
     """Run until something needs the driver; return a status code (ST_*).
 
     The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
@@ -1487,13 +1715,20 @@ def _advance(S):
         if nsteps > YIELD_STEPS:
             return ST_YIELD
         # ---- one accepted step, ending at the earliest event if there is one ------------
+        _save_start(S)
+        # the series where it reaches further than DOP853's next step, else DOP853
         h = S.fs[F_H]
+        ht = _taylor(S)
+        tay = ht >= h
+        S.ints[I_TAY] = 1 if tay else 0
+        if tay:
+            h = ht
+        order = PT if tay else 8
         tclip = min(tcol, tend)
         clipped = False
         if t + h >= tclip:
             h = tclip - t
             clipped = True
-        _save_start(S)
         S.fs[F_TPREV] = t
         S.ints[I_JUMP] = 0
         while True:
@@ -1515,11 +1750,14 @@ def _advance(S):
                 # force is not smooth; the event cuts the step anyway: go and land on it
                 # (the landing step passes the test, or is halved and retried)
                 break
-            h *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+            h *= max(0.2, 0.9 * err ** (-1.0 / order))
             clipped = False
             if h < 8.0 * EPS * max(1.0, abs(t)):
                 return ST_STEP_UNDERFLOW
-        hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
+        if tay:
+            hnext = S.fs[F_H]  # DOP853's proposal stands; the series sizes its own steps
+        else:
+            hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
         if j >= 0:
             # redo the step to end on the event, then refine by Newton on the step itself
             hev = th * h
@@ -1552,7 +1790,7 @@ def _advance(S):
                 # an event seen only on a failed step, and not there on a good one:
                 # shrink the step as for any failed step
                 _restore_start(S)
-                S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / 8.0))
+                S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / order))
                 continue
             S.fs[F_HLAST] = hev
             S.fs[F_T] = t + hev
@@ -1564,6 +1802,7 @@ def _advance(S):
             S.fs[F_H] = min(hnext, AFTER_EVENT * h)
         else:
             S.fs[F_T] = tclip if clipped else t + h
-            S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
+            if not tay:
+                S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
         S.ints[I_STEPS] += 1
         S.ints[I_POST] = 1
