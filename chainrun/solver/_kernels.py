@@ -15,8 +15,9 @@ linear), so a step that ends on an opening sees no kink. Each step is taken by t
 Taylor series of the motion to order PT (``_taylor``), whose steps are several times
 longer than those of a Runge-Kutta pair at the same tolerance and which is its own
 dense output; where the series does not exist or reaches less far (a contact closed
-just now, at compression exactly 0, is a branch point of c^alpha), by the explicit
-Runge-Kutta pair DOP853 (order 8, dense output of order 7).
+just now, at compression exactly 0, is a branch point of c^alpha), and on windows of
+many clusters (SERIES_CLUSTERS), by the explicit Runge-Kutta pair DOP853 (order 8,
+dense output of order 7).
 
 Contact states (``cst``)::
 
@@ -69,6 +70,10 @@ PT = 20  # order of the series of x(t)
 # tolerance: an estimate from the last terms is not a bound, and DOP853's, which the
 # tolerance was set against, is pessimistic (its steps are far more accurate than it says)
 TAYLOR_TOL = 0.1
+# the series is tried only on windows of at most this many clusters: a step of many
+# clusters (a line broken by many impacting balls) ends at the next event of any of
+# them, sooner than either method's step, and the series then costs more than DOP853
+SERIES_CLUSTERS = 8
 # Bernstein coefficients on [0, 1] of a polynomial of degree DB from its power
 # coefficients, b_i = sum_k C(i, k) / C(DB, k) a_k, stored transposed (_BERN[k, i]);
 # the terms of a series beyond DB are bounded by the sum of their magnitudes
@@ -1718,7 +1723,7 @@ def advance(S):
         _save_start(S)
         # the series where it reaches further than DOP853's next step, else DOP853
         h = S.fs[F_H]
-        ht = _taylor(S)
+        ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS else 0.0
         tay = ht >= h
         S.ints[I_TAY] = 1 if tay else 0
         if tay:
