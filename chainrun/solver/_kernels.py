@@ -156,8 +156,6 @@ State = namedtuple(
 )
 
 
-
-
 # =========================================================================================
 # forces
 # =========================================================================================
@@ -615,12 +613,12 @@ def _contact_series(S, j):
     pb = S.bmap[j + 1]
     TD, TX = S.TD, S.TX
     t0 = S.fs[F_TPREV]
-    for k in range(PT + 1):
-        TD[k] = 0.0
     if pa >= 0:
         for k in range(PT + 1):
             TD[k] = TX[pa, k]
     else:
+        for k in range(2, PT + 1):
+            TD[k] = 0.0
         TD[0] = S.bx[j] + S.bv[j] * (t0 - S.bt[j])
         TD[1] = S.bv[j]
     if pb >= 0:
