@@ -112,6 +112,7 @@ LEVEL_DORMANT = 1e-24
 LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
+N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
 #: the step after an event, as a fraction of the step that crossed it (measured on
 #: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
 AFTER_EVENT = 0.8
@@ -653,7 +654,7 @@ def _pressed_in_step(S, j):
     _contact_series(S, j)
     if _bernstein_range(S.TD, h, S.TS[0])[1] <= epsrel:
         return False
-    ns = 4 * N_SAMPLES
+    ns = N_SERIES_SAMPLES
     _sample_series(S, ns, h)
     for i in range(ns):
         if S.TS[1, i] > epsrel:
@@ -1287,7 +1288,7 @@ def _contact_event(S, j, hcap):
     floor = S.fs[F_FLOOR]
     # a series step is several DOP853 steps long: sample it as finely, on the series
     # of c itself (TD)
-    ns = 4 * N_SAMPLES if tay else N_SAMPLES
+    ns = N_SERIES_SAMPLES if tay else N_SAMPLES
     if tay:
         _sample_series(S, ns, h)
     pressed = c0 > lev1  # (a fresh contact's press beyond eps_rel)
