@@ -1,11 +1,14 @@
-"""Writes the DOP853 stage loops of ``_kernels.py`` as straight-line code.
+"""Writes the DOP853 stage loops and the Taylor-series sums of ``_kernels.py`` as straight-line code.
 
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
 previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerations
 alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls
 spends its time in loop overhead; written out with the coefficients as literals, each
-stage is one pass over the balls. This script regenerates the section of ``_kernels.py``
-between the markers below from scipy's DOP853 tableau::
+stage is one pass over the balls. The same holds for the sums over orders of the Taylor
+series (``_series_orders``, ``_series_bounds``): one pass over the window per order,
+with the sum over the lower orders written out. This script regenerates the section of
+``_kernels.py`` between the markers below from scipy's DOP853 tableau and the series'
+orders::
 
     python -m chainrun.solver._codegen          # rewrite the section
     python -m chainrun.solver._codegen --check  # exit 1 if it is out of date
@@ -13,6 +16,7 @@ between the markers below from scipy's DOP853 tableau::
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -103,7 +107,76 @@ def _nystrom(rows):
     return rows @ dop.A[:width, :width]
 
 
+def _chains(terms: list[str]) -> str:
+    """A sum as two interleaved chains (every other term), half as deep as one."""
+    if len(terms) < 4:
+        return " + ".join(terms)
+    return "(" + " + ".join(terms[0::2]) + ") + (" + " + ".join(terms[1::2]) + ")"
+
+
+def _series(pt: int) -> list[str]:
+    """Orders 1..pt-2 of the force series and 3..pt of the positions' (see _taylor).
+
+    f_k = (alpha c_k f_0 + sum_{j=1..k-1} ((alpha+1) j / k - 1) c_j f_{k-j}) / c_0, the
+    recurrence of _taylor with 1/k folded into its weights; TU is shifted by a lane.
+    """
+    lines = [
+        "@njit(fastmath={\"contract\"})",
+        "def _series_orders(TX, TC, TU, RC, nc, m, alpha):",
+        '    """Orders 1 and up of the force series of every contact lane (see _taylor)."""',
+        "    a1 = alpha + 1.0",
+    ]
+    for k in range(1, pt - 1):
+        terms = ["alpha * ck * TU[0, p + 1]"] + [
+            f"(a1 * {j / k!r} - 1.0) * TC[{j}, p] * TU[{k - j}, p + 1]" for j in range(1, k)]
+        lines += [
+            "    for p in range(nc):",
+            f"        ck = TX[{k}, p] - TX[{k}, p + 1]",
+            f"        TC[{k}, p] = ck",
+            f"        TU[{k}, p + 1] = ({_chains(terms)}) * RC[p]",
+            "    for p in range(m):",
+            f"        TX[{k + 2}, p] = (TU[{k}, p] - TU[{k}, p + 1]) * {1.0 / ((k + 1) * (k + 2))!r}",
+        ]
+    return lines
+
+
+def _bounds(pt: int, db: int) -> list[str]:
+    """Bernstein bounds of every contact lane's compression over a series step."""
+    lines = [
+        "@njit(fastmath={\"contract\"})",
+        "def _series_bounds(TX, LO, HI, nc, h):",
+        '    """Bounds of every contact lane\'s compression over a series step [0, h].',
+        "",
+        "    Into LO, HI: the hull of the Bernstein coefficients of the lane's series up to",
+        "    degree DB, widened by the magnitude of the higher terms and by rounding, as",
+        "    _bernstein_range does for one contact.",
+        '    """',
+        "    h1 = h",
+    ]
+    lines += [f"    h{k} = h{k - 1} * h" for k in range(2, pt + 1)]
+    lines += [
+        "    for p in range(nc):",
+        "        a0 = TX[0, p] - TX[0, p + 1]",
+    ]
+    lines += [f"        a{k} = (TX[{k}, p] - TX[{k}, p + 1]) * h{k}" for k in range(1, pt + 1)]
+    low = [f"abs(a{k})" for k in range(db + 1)]
+    high = [f"abs(a{k})" for k in range(db + 1, pt + 1)]
+    lines.append(f"        r = 64.0 * EPS * ({_chains(low)}) + {_chains(high)}")
+    for i in range(1, db + 1):
+        terms = ["a0"] + [f"{math.comb(i, k) / math.comb(db, k)!r} * a{k}"
+                          for k in range(1, i + 1)]
+        lines.append(f"        b{i} = {_chains(terms)}")
+    bs = ", ".join(["a0"] + [f"b{i}" for i in range(1, db + 1)])
+    lines += [
+        f"        LO[p] = min({bs}) - r",
+        f"        HI[p] = max({bs}) + r",
+    ]
+    return lines
+
+
 def generate() -> str:
+    from chainrun.solver._kernels import DB, PT
+
     A, B, C = dop.A, dop.B, dop.C
     ns, nse = dop.N_STAGES, dop.N_STAGES_EXTENDED
     AA = A @ A  # stage positions: X0 + h C V0 + h^2 (A @ A) @ KV
@@ -209,6 +282,7 @@ def generate() -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
+    lines += ["", ""] + _series(PT) + ["", ""] + _bounds(PT, DB)
     lines.append(END)
     return "\n".join(lines) + "\n"
 

@@ -113,6 +113,9 @@ LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
 N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
+# rows of the lane scratch TR: a contact lane's mask (1 inside a cluster) and 1 / c_0
+# (_taylor); the bounds of its compression over a series step (_series_bounds)
+R_MASK, R_INV, R_LO, R_HI, N_LANE_ROWS = range(5)
 #: the step after an event, as a fraction of the step that crossed it (measured on
 #: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
 AFTER_EVENT = 0.8
@@ -139,10 +142,11 @@ State = namedtuple(
         # compact (integrated) balls: state, step start, dense-stage positions (XS),
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
         # the stamp of the step they were built for (DM, see _dense_at); the Taylor
-        # series of the positions (TX), compressions (TC) and forces (TU), ball-major,
-        # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
+        # series of the positions (TX), compressions (TC) and forces (TU), order-major
+        # (see _taylor) with lane scratch (TR), and of one contact's compression (TD,
+        # shape (PT + 1,)) with its samples (TS)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
-        "TX", "TC", "TU", "TD", "TS",
+        "TX", "TC", "TU", "TR", "TD", "TS",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
         # event log buffer
@@ -475,10 +479,189 @@ def _dense_rows(S, p):
     FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
     FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 904.8218815202387 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631898 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188784 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
     FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
+
+
+@njit(fastmath={"contract"})
+def _series_orders(TX, TC, TU, RC, nc, m, alpha):
+    """Orders 1 and up of the force series of every contact lane (see _taylor)."""
+    a1 = alpha + 1.0
+    for p in range(nc):
+        ck = TX[1, p] - TX[1, p + 1]
+        TC[1, p] = ck
+        TU[1, p + 1] = (alpha * ck * TU[0, p + 1]) * RC[p]
+    for p in range(m):
+        TX[3, p] = (TU[1, p] - TU[1, p + 1]) * 0.16666666666666666
+    for p in range(nc):
+        ck = TX[2, p] - TX[2, p + 1]
+        TC[2, p] = ck
+        TU[2, p + 1] = (alpha * ck * TU[0, p + 1] + (a1 * 0.5 - 1.0) * TC[1, p] * TU[1, p + 1]) * RC[p]
+    for p in range(m):
+        TX[4, p] = (TU[2, p] - TU[2, p + 1]) * 0.08333333333333333
+    for p in range(nc):
+        ck = TX[3, p] - TX[3, p + 1]
+        TC[3, p] = ck
+        TU[3, p + 1] = (alpha * ck * TU[0, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[1, p] * TU[2, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[2, p] * TU[1, p + 1]) * RC[p]
+    for p in range(m):
+        TX[5, p] = (TU[3, p] - TU[3, p + 1]) * 0.05
+    for p in range(nc):
+        ck = TX[4, p] - TX[4, p + 1]
+        TC[4, p] = ck
+        TU[4, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.5 - 1.0) * TC[2, p] * TU[2, p + 1]) + ((a1 * 0.25 - 1.0) * TC[1, p] * TU[3, p + 1] + (a1 * 0.75 - 1.0) * TC[3, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[6, p] = (TU[4, p] - TU[4, p + 1]) * 0.03333333333333333
+    for p in range(nc):
+        ck = TX[5, p] - TX[5, p + 1]
+        TC[5, p] = ck
+        TU[5, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.4 - 1.0) * TC[2, p] * TU[3, p + 1] + (a1 * 0.8 - 1.0) * TC[4, p] * TU[1, p + 1]) + ((a1 * 0.2 - 1.0) * TC[1, p] * TU[4, p + 1] + (a1 * 0.6 - 1.0) * TC[3, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[7, p] = (TU[5, p] - TU[5, p + 1]) * 0.023809523809523808
+    for p in range(nc):
+        ck = TX[6, p] - TX[6, p + 1]
+        TC[6, p] = ck
+        TU[6, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[2, p] * TU[4, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[4, p] * TU[2, p + 1]) + ((a1 * 0.16666666666666666 - 1.0) * TC[1, p] * TU[5, p + 1] + (a1 * 0.5 - 1.0) * TC[3, p] * TU[3, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[5, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[8, p] = (TU[6, p] - TU[6, p + 1]) * 0.017857142857142856
+    for p in range(nc):
+        ck = TX[7, p] - TX[7, p + 1]
+        TC[7, p] = ck
+        TU[7, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2857142857142857 - 1.0) * TC[2, p] * TU[5, p + 1] + (a1 * 0.5714285714285714 - 1.0) * TC[4, p] * TU[3, p + 1] + (a1 * 0.8571428571428571 - 1.0) * TC[6, p] * TU[1, p + 1]) + ((a1 * 0.14285714285714285 - 1.0) * TC[1, p] * TU[6, p + 1] + (a1 * 0.42857142857142855 - 1.0) * TC[3, p] * TU[4, p + 1] + (a1 * 0.7142857142857143 - 1.0) * TC[5, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[9, p] = (TU[7, p] - TU[7, p + 1]) * 0.013888888888888888
+    for p in range(nc):
+        ck = TX[8, p] - TX[8, p + 1]
+        TC[8, p] = ck
+        TU[8, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.25 - 1.0) * TC[2, p] * TU[6, p + 1] + (a1 * 0.5 - 1.0) * TC[4, p] * TU[4, p + 1] + (a1 * 0.75 - 1.0) * TC[6, p] * TU[2, p + 1]) + ((a1 * 0.125 - 1.0) * TC[1, p] * TU[7, p + 1] + (a1 * 0.375 - 1.0) * TC[3, p] * TU[5, p + 1] + (a1 * 0.625 - 1.0) * TC[5, p] * TU[3, p + 1] + (a1 * 0.875 - 1.0) * TC[7, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[10, p] = (TU[8, p] - TU[8, p + 1]) * 0.011111111111111112
+    for p in range(nc):
+        ck = TX[9, p] - TX[9, p + 1]
+        TC[9, p] = ck
+        TU[9, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2222222222222222 - 1.0) * TC[2, p] * TU[7, p + 1] + (a1 * 0.4444444444444444 - 1.0) * TC[4, p] * TU[5, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[6, p] * TU[3, p + 1] + (a1 * 0.8888888888888888 - 1.0) * TC[8, p] * TU[1, p + 1]) + ((a1 * 0.1111111111111111 - 1.0) * TC[1, p] * TU[8, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[3, p] * TU[6, p + 1] + (a1 * 0.5555555555555556 - 1.0) * TC[5, p] * TU[4, p + 1] + (a1 * 0.7777777777777778 - 1.0) * TC[7, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[11, p] = (TU[9, p] - TU[9, p + 1]) * 0.00909090909090909
+    for p in range(nc):
+        ck = TX[10, p] - TX[10, p + 1]
+        TC[10, p] = ck
+        TU[10, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2 - 1.0) * TC[2, p] * TU[8, p + 1] + (a1 * 0.4 - 1.0) * TC[4, p] * TU[6, p + 1] + (a1 * 0.6 - 1.0) * TC[6, p] * TU[4, p + 1] + (a1 * 0.8 - 1.0) * TC[8, p] * TU[2, p + 1]) + ((a1 * 0.1 - 1.0) * TC[1, p] * TU[9, p + 1] + (a1 * 0.3 - 1.0) * TC[3, p] * TU[7, p + 1] + (a1 * 0.5 - 1.0) * TC[5, p] * TU[5, p + 1] + (a1 * 0.7 - 1.0) * TC[7, p] * TU[3, p + 1] + (a1 * 0.9 - 1.0) * TC[9, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[12, p] = (TU[10, p] - TU[10, p + 1]) * 0.007575757575757576
+    for p in range(nc):
+        ck = TX[11, p] - TX[11, p + 1]
+        TC[11, p] = ck
+        TU[11, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.18181818181818182 - 1.0) * TC[2, p] * TU[9, p + 1] + (a1 * 0.36363636363636365 - 1.0) * TC[4, p] * TU[7, p + 1] + (a1 * 0.5454545454545454 - 1.0) * TC[6, p] * TU[5, p + 1] + (a1 * 0.7272727272727273 - 1.0) * TC[8, p] * TU[3, p + 1] + (a1 * 0.9090909090909091 - 1.0) * TC[10, p] * TU[1, p + 1]) + ((a1 * 0.09090909090909091 - 1.0) * TC[1, p] * TU[10, p + 1] + (a1 * 0.2727272727272727 - 1.0) * TC[3, p] * TU[8, p + 1] + (a1 * 0.45454545454545453 - 1.0) * TC[5, p] * TU[6, p + 1] + (a1 * 0.6363636363636364 - 1.0) * TC[7, p] * TU[4, p + 1] + (a1 * 0.8181818181818182 - 1.0) * TC[9, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[13, p] = (TU[11, p] - TU[11, p + 1]) * 0.00641025641025641
+    for p in range(nc):
+        ck = TX[12, p] - TX[12, p + 1]
+        TC[12, p] = ck
+        TU[12, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.16666666666666666 - 1.0) * TC[2, p] * TU[10, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[4, p] * TU[8, p + 1] + (a1 * 0.5 - 1.0) * TC[6, p] * TU[6, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[8, p] * TU[4, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[10, p] * TU[2, p + 1]) + ((a1 * 0.08333333333333333 - 1.0) * TC[1, p] * TU[11, p + 1] + (a1 * 0.25 - 1.0) * TC[3, p] * TU[9, p + 1] + (a1 * 0.4166666666666667 - 1.0) * TC[5, p] * TU[7, p + 1] + (a1 * 0.5833333333333334 - 1.0) * TC[7, p] * TU[5, p + 1] + (a1 * 0.75 - 1.0) * TC[9, p] * TU[3, p + 1] + (a1 * 0.9166666666666666 - 1.0) * TC[11, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[14, p] = (TU[12, p] - TU[12, p + 1]) * 0.005494505494505495
+    for p in range(nc):
+        ck = TX[13, p] - TX[13, p + 1]
+        TC[13, p] = ck
+        TU[13, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.15384615384615385 - 1.0) * TC[2, p] * TU[11, p + 1] + (a1 * 0.3076923076923077 - 1.0) * TC[4, p] * TU[9, p + 1] + (a1 * 0.46153846153846156 - 1.0) * TC[6, p] * TU[7, p + 1] + (a1 * 0.6153846153846154 - 1.0) * TC[8, p] * TU[5, p + 1] + (a1 * 0.7692307692307693 - 1.0) * TC[10, p] * TU[3, p + 1] + (a1 * 0.9230769230769231 - 1.0) * TC[12, p] * TU[1, p + 1]) + ((a1 * 0.07692307692307693 - 1.0) * TC[1, p] * TU[12, p + 1] + (a1 * 0.23076923076923078 - 1.0) * TC[3, p] * TU[10, p + 1] + (a1 * 0.38461538461538464 - 1.0) * TC[5, p] * TU[8, p + 1] + (a1 * 0.5384615384615384 - 1.0) * TC[7, p] * TU[6, p + 1] + (a1 * 0.6923076923076923 - 1.0) * TC[9, p] * TU[4, p + 1] + (a1 * 0.8461538461538461 - 1.0) * TC[11, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[15, p] = (TU[13, p] - TU[13, p + 1]) * 0.004761904761904762
+    for p in range(nc):
+        ck = TX[14, p] - TX[14, p + 1]
+        TC[14, p] = ck
+        TU[14, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.14285714285714285 - 1.0) * TC[2, p] * TU[12, p + 1] + (a1 * 0.2857142857142857 - 1.0) * TC[4, p] * TU[10, p + 1] + (a1 * 0.42857142857142855 - 1.0) * TC[6, p] * TU[8, p + 1] + (a1 * 0.5714285714285714 - 1.0) * TC[8, p] * TU[6, p + 1] + (a1 * 0.7142857142857143 - 1.0) * TC[10, p] * TU[4, p + 1] + (a1 * 0.8571428571428571 - 1.0) * TC[12, p] * TU[2, p + 1]) + ((a1 * 0.07142857142857142 - 1.0) * TC[1, p] * TU[13, p + 1] + (a1 * 0.21428571428571427 - 1.0) * TC[3, p] * TU[11, p + 1] + (a1 * 0.35714285714285715 - 1.0) * TC[5, p] * TU[9, p + 1] + (a1 * 0.5 - 1.0) * TC[7, p] * TU[7, p + 1] + (a1 * 0.6428571428571429 - 1.0) * TC[9, p] * TU[5, p + 1] + (a1 * 0.7857142857142857 - 1.0) * TC[11, p] * TU[3, p + 1] + (a1 * 0.9285714285714286 - 1.0) * TC[13, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[16, p] = (TU[14, p] - TU[14, p + 1]) * 0.004166666666666667
+    for p in range(nc):
+        ck = TX[15, p] - TX[15, p + 1]
+        TC[15, p] = ck
+        TU[15, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.13333333333333333 - 1.0) * TC[2, p] * TU[13, p + 1] + (a1 * 0.26666666666666666 - 1.0) * TC[4, p] * TU[11, p + 1] + (a1 * 0.4 - 1.0) * TC[6, p] * TU[9, p + 1] + (a1 * 0.5333333333333333 - 1.0) * TC[8, p] * TU[7, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[10, p] * TU[5, p + 1] + (a1 * 0.8 - 1.0) * TC[12, p] * TU[3, p + 1] + (a1 * 0.9333333333333333 - 1.0) * TC[14, p] * TU[1, p + 1]) + ((a1 * 0.06666666666666667 - 1.0) * TC[1, p] * TU[14, p + 1] + (a1 * 0.2 - 1.0) * TC[3, p] * TU[12, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[5, p] * TU[10, p + 1] + (a1 * 0.4666666666666667 - 1.0) * TC[7, p] * TU[8, p + 1] + (a1 * 0.6 - 1.0) * TC[9, p] * TU[6, p + 1] + (a1 * 0.7333333333333333 - 1.0) * TC[11, p] * TU[4, p + 1] + (a1 * 0.8666666666666667 - 1.0) * TC[13, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[17, p] = (TU[15, p] - TU[15, p + 1]) * 0.003676470588235294
+    for p in range(nc):
+        ck = TX[16, p] - TX[16, p + 1]
+        TC[16, p] = ck
+        TU[16, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.125 - 1.0) * TC[2, p] * TU[14, p + 1] + (a1 * 0.25 - 1.0) * TC[4, p] * TU[12, p + 1] + (a1 * 0.375 - 1.0) * TC[6, p] * TU[10, p + 1] + (a1 * 0.5 - 1.0) * TC[8, p] * TU[8, p + 1] + (a1 * 0.625 - 1.0) * TC[10, p] * TU[6, p + 1] + (a1 * 0.75 - 1.0) * TC[12, p] * TU[4, p + 1] + (a1 * 0.875 - 1.0) * TC[14, p] * TU[2, p + 1]) + ((a1 * 0.0625 - 1.0) * TC[1, p] * TU[15, p + 1] + (a1 * 0.1875 - 1.0) * TC[3, p] * TU[13, p + 1] + (a1 * 0.3125 - 1.0) * TC[5, p] * TU[11, p + 1] + (a1 * 0.4375 - 1.0) * TC[7, p] * TU[9, p + 1] + (a1 * 0.5625 - 1.0) * TC[9, p] * TU[7, p + 1] + (a1 * 0.6875 - 1.0) * TC[11, p] * TU[5, p + 1] + (a1 * 0.8125 - 1.0) * TC[13, p] * TU[3, p + 1] + (a1 * 0.9375 - 1.0) * TC[15, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[18, p] = (TU[16, p] - TU[16, p + 1]) * 0.0032679738562091504
+    for p in range(nc):
+        ck = TX[17, p] - TX[17, p + 1]
+        TC[17, p] = ck
+        TU[17, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.11764705882352941 - 1.0) * TC[2, p] * TU[15, p + 1] + (a1 * 0.23529411764705882 - 1.0) * TC[4, p] * TU[13, p + 1] + (a1 * 0.35294117647058826 - 1.0) * TC[6, p] * TU[11, p + 1] + (a1 * 0.47058823529411764 - 1.0) * TC[8, p] * TU[9, p + 1] + (a1 * 0.5882352941176471 - 1.0) * TC[10, p] * TU[7, p + 1] + (a1 * 0.7058823529411765 - 1.0) * TC[12, p] * TU[5, p + 1] + (a1 * 0.8235294117647058 - 1.0) * TC[14, p] * TU[3, p + 1] + (a1 * 0.9411764705882353 - 1.0) * TC[16, p] * TU[1, p + 1]) + ((a1 * 0.058823529411764705 - 1.0) * TC[1, p] * TU[16, p + 1] + (a1 * 0.17647058823529413 - 1.0) * TC[3, p] * TU[14, p + 1] + (a1 * 0.29411764705882354 - 1.0) * TC[5, p] * TU[12, p + 1] + (a1 * 0.4117647058823529 - 1.0) * TC[7, p] * TU[10, p + 1] + (a1 * 0.5294117647058824 - 1.0) * TC[9, p] * TU[8, p + 1] + (a1 * 0.6470588235294118 - 1.0) * TC[11, p] * TU[6, p + 1] + (a1 * 0.7647058823529411 - 1.0) * TC[13, p] * TU[4, p + 1] + (a1 * 0.8823529411764706 - 1.0) * TC[15, p] * TU[2, p + 1])) * RC[p]
+    for p in range(m):
+        TX[19, p] = (TU[17, p] - TU[17, p + 1]) * 0.0029239766081871343
+    for p in range(nc):
+        ck = TX[18, p] - TX[18, p + 1]
+        TC[18, p] = ck
+        TU[18, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.1111111111111111 - 1.0) * TC[2, p] * TU[16, p + 1] + (a1 * 0.2222222222222222 - 1.0) * TC[4, p] * TU[14, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[6, p] * TU[12, p + 1] + (a1 * 0.4444444444444444 - 1.0) * TC[8, p] * TU[10, p + 1] + (a1 * 0.5555555555555556 - 1.0) * TC[10, p] * TU[8, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[12, p] * TU[6, p + 1] + (a1 * 0.7777777777777778 - 1.0) * TC[14, p] * TU[4, p + 1] + (a1 * 0.8888888888888888 - 1.0) * TC[16, p] * TU[2, p + 1]) + ((a1 * 0.05555555555555555 - 1.0) * TC[1, p] * TU[17, p + 1] + (a1 * 0.16666666666666666 - 1.0) * TC[3, p] * TU[15, p + 1] + (a1 * 0.2777777777777778 - 1.0) * TC[5, p] * TU[13, p + 1] + (a1 * 0.3888888888888889 - 1.0) * TC[7, p] * TU[11, p + 1] + (a1 * 0.5 - 1.0) * TC[9, p] * TU[9, p + 1] + (a1 * 0.6111111111111112 - 1.0) * TC[11, p] * TU[7, p + 1] + (a1 * 0.7222222222222222 - 1.0) * TC[13, p] * TU[5, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[15, p] * TU[3, p + 1] + (a1 * 0.9444444444444444 - 1.0) * TC[17, p] * TU[1, p + 1])) * RC[p]
+    for p in range(m):
+        TX[20, p] = (TU[18, p] - TU[18, p + 1]) * 0.002631578947368421
+
+
+@njit(fastmath={"contract"})
+def _series_bounds(TX, LO, HI, nc, h):
+    """Bounds of every contact lane's compression over a series step [0, h].
+
+    Into LO, HI: the hull of the Bernstein coefficients of the lane's series up to
+    degree DB, widened by the magnitude of the higher terms and by rounding, as
+    _bernstein_range does for one contact.
+    """
+    h1 = h
+    h2 = h1 * h
+    h3 = h2 * h
+    h4 = h3 * h
+    h5 = h4 * h
+    h6 = h5 * h
+    h7 = h6 * h
+    h8 = h7 * h
+    h9 = h8 * h
+    h10 = h9 * h
+    h11 = h10 * h
+    h12 = h11 * h
+    h13 = h12 * h
+    h14 = h13 * h
+    h15 = h14 * h
+    h16 = h15 * h
+    h17 = h16 * h
+    h18 = h17 * h
+    h19 = h18 * h
+    h20 = h19 * h
+    for p in range(nc):
+        a0 = TX[0, p] - TX[0, p + 1]
+        a1 = (TX[1, p] - TX[1, p + 1]) * h1
+        a2 = (TX[2, p] - TX[2, p + 1]) * h2
+        a3 = (TX[3, p] - TX[3, p + 1]) * h3
+        a4 = (TX[4, p] - TX[4, p + 1]) * h4
+        a5 = (TX[5, p] - TX[5, p + 1]) * h5
+        a6 = (TX[6, p] - TX[6, p + 1]) * h6
+        a7 = (TX[7, p] - TX[7, p + 1]) * h7
+        a8 = (TX[8, p] - TX[8, p + 1]) * h8
+        a9 = (TX[9, p] - TX[9, p + 1]) * h9
+        a10 = (TX[10, p] - TX[10, p + 1]) * h10
+        a11 = (TX[11, p] - TX[11, p + 1]) * h11
+        a12 = (TX[12, p] - TX[12, p + 1]) * h12
+        a13 = (TX[13, p] - TX[13, p + 1]) * h13
+        a14 = (TX[14, p] - TX[14, p + 1]) * h14
+        a15 = (TX[15, p] - TX[15, p + 1]) * h15
+        a16 = (TX[16, p] - TX[16, p + 1]) * h16
+        a17 = (TX[17, p] - TX[17, p + 1]) * h17
+        a18 = (TX[18, p] - TX[18, p + 1]) * h18
+        a19 = (TX[19, p] - TX[19, p + 1]) * h19
+        a20 = (TX[20, p] - TX[20, p + 1]) * h20
+        r = 64.0 * EPS * ((abs(a0) + abs(a2) + abs(a4) + abs(a6) + abs(a8) + abs(a10)) + (abs(a1) + abs(a3) + abs(a5) + abs(a7) + abs(a9))) + (abs(a11) + abs(a13) + abs(a15) + abs(a17) + abs(a19)) + (abs(a12) + abs(a14) + abs(a16) + abs(a18) + abs(a20))
+        b1 = a0 + 0.1 * a1
+        b2 = a0 + 0.2 * a1 + 0.022222222222222223 * a2
+        b3 = (a0 + 0.06666666666666667 * a2) + (0.3 * a1 + 0.008333333333333333 * a3)
+        b4 = (a0 + 0.13333333333333333 * a2 + 0.004761904761904762 * a4) + (0.4 * a1 + 0.03333333333333333 * a3)
+        b5 = (a0 + 0.2222222222222222 * a2 + 0.023809523809523808 * a4) + (0.5 * a1 + 0.08333333333333333 * a3 + 0.003968253968253968 * a5)
+        b6 = (a0 + 0.3333333333333333 * a2 + 0.07142857142857142 * a4 + 0.004761904761904762 * a6) + (0.6 * a1 + 0.16666666666666666 * a3 + 0.023809523809523808 * a5)
+        b7 = (a0 + 0.4666666666666667 * a2 + 0.16666666666666666 * a4 + 0.03333333333333333 * a6) + (0.7 * a1 + 0.2916666666666667 * a3 + 0.08333333333333333 * a5 + 0.008333333333333333 * a7)
+        b8 = (a0 + 0.6222222222222222 * a2 + 0.3333333333333333 * a4 + 0.13333333333333333 * a6 + 0.022222222222222223 * a8) + (0.8 * a1 + 0.4666666666666667 * a3 + 0.2222222222222222 * a5 + 0.06666666666666667 * a7)
+        b9 = (a0 + 0.8 * a2 + 0.6 * a4 + 0.4 * a6 + 0.2 * a8) + (0.9 * a1 + 0.7 * a3 + 0.5 * a5 + 0.3 * a7 + 0.1 * a9)
+        b10 = (a0 + 1.0 * a2 + 1.0 * a4 + 1.0 * a6 + 1.0 * a8 + 1.0 * a10) + (1.0 * a1 + 1.0 * a3 + 1.0 * a5 + 1.0 * a7 + 1.0 * a9)
+        LO[p] = min(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) - r
+        HI[p] = max(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) + r
 # ---- END GENERATED STAGES ----
 
 
-@njit(fastmath={"reassoc", "contract"})
+@njit(fastmath={"contract"})
 def _taylor(S):
     """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
 
@@ -490,66 +673,69 @@ def _taylor(S):
     c f' = alpha c' f gives f_k = sum_{j=1..k} ((alpha+1) j - k) c_j f_{k-j} / (k c_0);
     for alpha = 1, f = c (Jorba & Zou, see the module's references).
 
+    The series are order-major (row k holds every ball's term of order k), and every
+    loop runs across the window, clusters and all: the gap after a cluster's last ball
+    is a contact lane whose force is masked to 0. The lanes are independent, so the
+    loops vectorise, where a loop over one contact's orders would be one long chain;
+    each order's sum over the lower ones is written out (_series_orders, generated
+    by _codegen), one pass over the window per order.
+
     Returns the longest step whose truncation (estimated by the last two terms of x
     and of v) is within TAYLOR_TOL of the tolerance, or 0 where the series does not
-    exist: a
-    compression exactly 0 (just closed) is a branch point of c^alpha, which DOP853
-    steps through.
+    exist: a compression exactly 0 (just closed) is a branch point of c^alpha, which
+    DOP853 steps through.
     """
     m = S.ints[I_M]
+    nc = m - 1  # contact lanes: lane p joins compact balls p and p + 1
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     TX, TC, TU = S.TX, S.TC, S.TU
+    MK, RC = S.TR[R_MASK], S.TR[R_INV]
     X0, V0 = S.X0, S.V0
-    # ball-major, as TX: each sum of the recurrence runs over contiguous orders;
-    # the unused last column of TC holds 1 / c_0
     for p in range(m):
-        TX[p, 0] = X0[p]
-        TX[p, 1] = V0[p]
-    a1 = alpha + 1.0
+        TX[0, p] = X0[p]
+        TX[1, p] = V0[p]
+        MK[p] = 0.0
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
-        e = o + S.chi[c] - S.clo[c]
-        if mode != 0:
-            for p in range(o, e):
-                c0 = X0[p] - X0[p + 1]
-                if c0 == 0.0:
-                    return 0.0
-                TC[p, PT] = 1.0 / c0
-        for k in range(PT - 1):
-            if mode == 0:
-                for p in range(o, e):
-                    TU[p, k] = TX[p, k] - TX[p + 1, k]
-            elif k == 0:
-                for p in range(o, e):
-                    TC[p, 0] = X0[p] - X0[p + 1]
-                    TU[p, 0] = _force(TC[p, 0], mode, alpha)
-            else:
-                r = 1.0 / k
-                for p in range(o, e):
-                    ck = TX[p, k] - TX[p + 1, k]
-                    TC[p, k] = ck
-                    acc = (a1 * k - k) * ck * TU[p, 0]
-                    for j in range(1, k):
-                        acc += (a1 * j - k) * TC[p, j] * TU[p, k - j]
-                    TU[p, k] = acc * TC[p, PT] * r
+        for p in range(o, o + S.chi[c] - S.clo[c]):
+            MK[p] = 1.0
+    # TU is shifted by one lane: TU[k, p + 1] is the force of contact lane p, and
+    # columns 0 and m stay 0, so that every ball's acceleration is one difference
+    for k in range(PT - 1):
+        TU[k, m] = 0.0
+    for p in range(nc):
+        c0 = X0[p] - X0[p + 1]
+        if c0 == 0.0 and MK[p] != 0.0 and mode != 0:
+            return 0.0
+        TU[0, p + 1] = _force(c0, mode, alpha) * MK[p]
+        RC[p] = MK[p] / c0 if MK[p] != 0.0 and mode != 0 else 0.0
+    for p in range(m):
+        TX[2, p] = 0.5 * (TU[0, p] - TU[0, p + 1])
+    if mode == 0:
+        for k in range(1, PT - 1):
+            for p in range(nc):
+                TU[k, p + 1] = (TX[k, p] - TX[k, p + 1]) * MK[p]
             s = 1.0 / ((k + 1) * (k + 2))
-            TX[o, k + 2] = -TU[o, k] * s
-            for p in range(o + 1, e):
-                TX[p, k + 2] = (TU[p - 1, k] - TU[p, k]) * s
-            TX[e, k + 2] = TU[e - 1, k] * s
+            for p in range(m):
+                TX[k + 2, p] = (TU[k, p] - TU[k, p + 1]) * s
+    else:
+        _series_orders(TX, TC, TU, RC, nc, m, alpha)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
     qx2 = 0.0
-    for p in range(m):
-        qx1 = max(qx1, abs(TX[p, PT]) / (tol + 64.0 * EPS * abs(X0[p])))
-        qx2 = max(qx2, abs(TX[p, PT - 1]) / (tol + 64.0 * EPS * abs(X0[p])))
     qv1 = 0.0
     qv2 = 0.0
     for p in range(m):
-        qv1 = max(qv1, PT * abs(TX[p, PT]) / (tol + 64.0 * EPS * abs(V0[p])))
-        qv2 = max(qv2, (PT - 1) * abs(TX[p, PT - 1]) / (tol + 64.0 * EPS * abs(V0[p])))
+        ax = 1.0 / (tol + 64.0 * EPS * abs(X0[p]))
+        av = 1.0 / (tol + 64.0 * EPS * abs(V0[p]))
+        t1 = abs(TX[PT, p])
+        t2 = abs(TX[PT - 1, p])
+        qx1 = max(qx1, t1 * ax)
+        qx2 = max(qx2, t2 * ax)
+        qv1 = max(qv1, PT * t1 * av)
+        qv2 = max(qv2, (PT - 1) * t2 * av)
     if not (qx1 < np.inf and qx2 < np.inf and qv1 < np.inf and qv2 < np.inf):
         return 0.0
     S.fs[F_QX1] = qx1
@@ -572,23 +758,34 @@ def _taylor(S):
 def _taylor_at(S, p, s):
     """(x, v) of compact ball p at time s after the step's start, from its series."""
     T = S.TX
-    x = T[p, PT]
-    v = PT * T[p, PT]
+    x = T[PT, p]
+    v = PT * T[PT, p]
     for k in range(PT - 1, 0, -1):
-        x = x * s + T[p, k]
-        v = v * s + k * T[p, k]
-    return x * s + T[p, 0], v
+        x = x * s + T[k, p]
+        v = v * s + k * T[k, p]
+    return x * s + T[0, p], v
 
 
-@njit
+@njit(fastmath={"contract"})
 def _taylor_step(S, h):
-    """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance."""
+    """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
+
+    Horner across the window, order by order (the balls' chains are independent).
+    """
     m = S.ints[I_M]
+    T, X, V = S.TX, S.X, S.V
     for p in range(m):
-        S.X[p], S.V[p] = _taylor_at(S, p, h)
-    _rhs(S, S.X, S.A)
+        X[p] = T[PT, p]
+        V[p] = PT * T[PT, p]
+    for k in range(PT - 1, 0, -1):
+        for p in range(m):
+            X[p] = X[p] * h + T[k, p]
+            V[p] = V[p] * h + k * T[k, p]
     for p in range(m):
-        if not (np.isfinite(S.X[p]) and np.isfinite(S.V[p])):
+        X[p] = X[p] * h + T[0, p]
+    _rhs(S, X, S.A)
+    for p in range(m):
+        if not (np.isfinite(X[p]) and np.isfinite(V[p])):
             return np.inf
     h1 = abs(h) ** (PT - 2)
     return max(S.fs[F_QX1] * h1 * h * h, S.fs[F_QX2] * h1 * h,
@@ -616,7 +813,7 @@ def _contact_series(S, j):
     t0 = S.fs[F_TPREV]
     if pa >= 0:
         for k in range(PT + 1):
-            TD[k] = TX[pa, k]
+            TD[k] = TX[k, pa]
     else:
         for k in range(2, PT + 1):
             TD[k] = 0.0
@@ -624,7 +821,7 @@ def _contact_series(S, j):
         TD[1] = S.bv[j]
     if pb >= 0:
         for k in range(PT + 1):
-            TD[k] -= TX[pb, k]
+            TD[k] -= TX[k, pb]
     else:
         TD[0] -= S.bx[j + 1] + S.bv[j + 1] * (t0 - S.bt[j + 1])
         TD[1] -= S.bv[j + 1]
@@ -708,7 +905,7 @@ def _curvature_bound(S, j):
         g = 0.0
         hk = 1.0
         for k in range(2, PT + 1):
-            d = (S.TX[pa, k] if pa >= 0 else 0.0) - (S.TX[pb, k] if pb >= 0 else 0.0)
+            d = (S.TX[k, pa] if pa >= 0 else 0.0) - (S.TX[k, pb] if pb >= 0 else 0.0)
             g += k * (k - 1) * abs(d) * hk
             hk *= h
         return g
@@ -1361,6 +1558,10 @@ def _find_event(S):
     h = S.fs[F_HLAST]
     q = 0.25 * h * h
     tay = S.ints[I_TAY] == 1
+    LO, HI = S.TR[R_LO], S.TR[R_HI]
+    if tay:
+        _series_bounds(S.TX, LO, HI, S.ints[I_M] - 1, h)
+    epsrel = S.fs[F_EPSREL]
     X, X0, A, A0 = S.X, S.X0, S.A, S.A0
     for c in range(S.ints[I_NCL]):
         lo = S.clo[c]
@@ -1370,31 +1571,18 @@ def _find_event(S):
             if j == lo - 1 and c > 0 and S.chi[c - 1] == j:
                 continue
             st = S.cst[j]
-            if st == FRESH:
-                if not tay:
-                    continue  # checked at the step's end (_release_quiet)
-                c0 = _contact_at(S, j, 0.0)[0]
-                c1 = _contact_at(S, j, 1.0)[0]
-                if max(c0, c1) + q * _curvature_bound(S, j) < S.fs[F_EPSREL]:
-                    continue  # never pressed beyond eps_rel in this step
-            if st == DORMANT or st == OPEN:
-                # quick rejections; the general path below repeats them exactly
-                cq0 = _contact_at(S, j, 0.0)[0]
-                cq1 = _contact_at(S, j, 1.0)[0]
-                if st == DORMANT:
-                    if cq1 < LEVEL_LOCATE:
-                        continue
-                elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
-                    continue  # stays open: below both of its levels (0 and lvl > 0)
-            if j >= lo and j < S.chi[c] and st == ACTIVE:
-                # fast path, an internal active contact: can it reach zero in this step?
+            if j >= lo and j < S.chi[c]:
+                # a contact inside the cluster, active or fresh (never pressed beyond
+                # eps_rel): can it open in this step?
                 p = o + j
-                c0 = X0[p] - X0[p + 1]
-                c1 = X[p] - X[p + 1]
                 if tay:
-                    if min(c0, c1) > q * _curvature_bound(S, j):
+                    if LO[p] > 0.0 or (st == FRESH and HI[p] < epsrel):
                         continue
+                elif st == FRESH:
+                    continue  # checked at the step's end (_release_quiet)
                 else:
+                    c0 = X0[p] - X0[p + 1]
+                    c1 = X[p] - X[p + 1]
                     g0 = A0[p] - A0[p + 1]
                     g1 = A[p] - A[p + 1]
                     if min(c0, c1) > q * max(abs(g0), abs(g1)):
@@ -1402,6 +1590,16 @@ def _find_event(S):
                     if _stays_positive(c0, c1, S.V0[p] - S.V0[p + 1],
                                        S.V[p] - S.V[p + 1], g0, g1, h):
                         continue
+            else:
+                # quick rejections at a cluster's edge; the general path repeats them
+                cq0 = _contact_at(S, j, 0.0)[0]
+                cq1 = _contact_at(S, j, 1.0)[0]
+                if st == DORMANT:
+                    if cq1 < LEVEL_LOCATE:
+                        continue
+                elif st == OPEN:
+                    if max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
+                        continue  # stays open: below both of its levels (0 and lvl > 0)
             th, kind, lev = _contact_event(S, j, best)
             if th < best:
                 best = th
