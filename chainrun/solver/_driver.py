@@ -74,7 +74,7 @@ def _alloc_window(cap: int) -> dict:
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
         FS=np.zeros(cap), KV=np.zeros((K._NSE, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
-        TX=np.zeros((K.PT + 1, cap)), TC=np.zeros((K.PT + 1, cap)), TU=np.zeros((K.PT + 1, cap + 1)),
+        TX=np.zeros((K.PT + 1, cap)), TW=np.zeros(-(-cap // K.SERIES_TILE) * K.TILE_STRIDE),
         TR=np.zeros((K.N_LANE_ROWS, cap)),
         TD=np.zeros(K.PT + 1), TS=np.zeros((2, K.N_SERIES_SAMPLES)),
     )

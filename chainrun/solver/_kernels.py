@@ -113,9 +113,15 @@ LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
 N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
-# rows of the lane scratch TR: a contact lane's mask (1 inside a cluster) and 1 / c_0
-# (_taylor); the bounds of its compression over a series step (_series_bounds)
-R_MASK, R_INV, R_LO, R_HI, N_LANE_ROWS = range(5)
+# rows of the lane scratch TR: a contact lane's mask (1 inside a cluster, _taylor);
+# the bounds of its compression over a series step (_series_bounds)
+R_MASK, R_LO, R_HI, N_LANE_ROWS = range(4)
+# the series' work tiles TW (see _tw): lanes in tiles of SERIES_TILE, each tile holding
+# TILE_ROWS rows: the compressions' series c_k (rows k < PT), the forces' f_k (rows
+# PT + k) and 1 / c_0 (row 2 PT)
+SERIES_TILE = 16
+TILE_ROWS = 2 * PT + 1
+TILE_STRIDE = TILE_ROWS * SERIES_TILE
 #: the step after an event, as a fraction of the step that crossed it (measured on
 #: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
 AFTER_EVENT = 0.8
@@ -142,11 +148,11 @@ State = namedtuple(
         # compact (integrated) balls: state, step start, dense-stage positions (XS),
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
         # the stamp of the step they were built for (DM, see _dense_at); the Taylor
-        # series of the positions (TX), compressions (TC) and forces (TU), order-major
-        # (see _taylor) with lane scratch (TR), and of one contact's compression (TD,
-        # shape (PT + 1,)) with its samples (TS)
+        # series of the positions (TX), order-major (see _taylor), with the work tiles
+        # of the compressions' and forces' series (TW, see _tw) and lane scratch (TR),
+        # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
-        "TX", "TC", "TU", "TR", "TD", "TS",
+        "TX", "TW", "TR", "TD", "TS",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
         # event log buffer
@@ -482,141 +488,230 @@ def _dense_rows(S, p):
 
 
 @njit(fastmath={"contract"})
-def _series_orders(TX, TC, TU, RC, nc, m, alpha):
+def _series_orders(TX, W, nc, m, alpha):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
+    nt = (nc + SERIES_TILE - 1) // SERIES_TILE
     for p in range(nc):
-        ck = TX[1, p] - TX[1, p + 1]
-        TC[1, p] = ck
-        TU[1, p + 1] = (alpha * ck * TU[0, p + 1]) * RC[p]
+        W[_tw(p, 1)] = TX[1, p] - TX[1, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 25 * SERIES_TILE] = (alpha * W[o + 1 * SERIES_TILE] * W[o + 24 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[3, p] = (TU[1, p] - TU[1, p + 1]) * 0.16666666666666666
+        fl = W[_tw(p - 1, 25)] if p > 0 else 0.0
+        fr = W[_tw(p, 25)] if p < nc else 0.0
+        TX[3, p] = (fl - fr) * 0.16666666666666666
     for p in range(nc):
-        ck = TX[2, p] - TX[2, p + 1]
-        TC[2, p] = ck
-        TU[2, p + 1] = (alpha * ck * TU[0, p + 1] + (a1 * 0.5 - 1.0) * TC[1, p] * TU[1, p + 1]) * RC[p]
+        W[_tw(p, 2)] = TX[2, p] - TX[2, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 26 * SERIES_TILE] = (alpha * W[o + 2 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[4, p] = (TU[2, p] - TU[2, p + 1]) * 0.08333333333333333
+        fl = W[_tw(p - 1, 26)] if p > 0 else 0.0
+        fr = W[_tw(p, 26)] if p < nc else 0.0
+        TX[4, p] = (fl - fr) * 0.08333333333333333
     for p in range(nc):
-        ck = TX[3, p] - TX[3, p + 1]
-        TC[3, p] = ck
-        TU[3, p + 1] = (alpha * ck * TU[0, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[1, p] * TU[2, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[2, p] * TU[1, p + 1]) * RC[p]
+        W[_tw(p, 3)] = TX[3, p] - TX[3, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 27 * SERIES_TILE] = (alpha * W[o + 3 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 26 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[5, p] = (TU[3, p] - TU[3, p + 1]) * 0.05
+        fl = W[_tw(p - 1, 27)] if p > 0 else 0.0
+        fr = W[_tw(p, 27)] if p < nc else 0.0
+        TX[5, p] = (fl - fr) * 0.05
     for p in range(nc):
-        ck = TX[4, p] - TX[4, p + 1]
-        TC[4, p] = ck
-        TU[4, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.5 - 1.0) * TC[2, p] * TU[2, p + 1]) + ((a1 * 0.25 - 1.0) * TC[1, p] * TU[3, p + 1] + (a1 * 0.75 - 1.0) * TC[3, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 4)] = TX[4, p] - TX[4, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 28 * SERIES_TILE] = ((alpha * W[o + 4 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.25 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[6, p] = (TU[4, p] - TU[4, p + 1]) * 0.03333333333333333
+        fl = W[_tw(p - 1, 28)] if p > 0 else 0.0
+        fr = W[_tw(p, 28)] if p < nc else 0.0
+        TX[6, p] = (fl - fr) * 0.03333333333333333
     for p in range(nc):
-        ck = TX[5, p] - TX[5, p + 1]
-        TC[5, p] = ck
-        TU[5, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.4 - 1.0) * TC[2, p] * TU[3, p + 1] + (a1 * 0.8 - 1.0) * TC[4, p] * TU[1, p + 1]) + ((a1 * 0.2 - 1.0) * TC[1, p] * TU[4, p + 1] + (a1 * 0.6 - 1.0) * TC[3, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 5)] = TX[5, p] - TX[5, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 29 * SERIES_TILE] = ((alpha * W[o + 5 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.2 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[7, p] = (TU[5, p] - TU[5, p + 1]) * 0.023809523809523808
+        fl = W[_tw(p - 1, 29)] if p > 0 else 0.0
+        fr = W[_tw(p, 29)] if p < nc else 0.0
+        TX[7, p] = (fl - fr) * 0.023809523809523808
     for p in range(nc):
-        ck = TX[6, p] - TX[6, p + 1]
-        TC[6, p] = ck
-        TU[6, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[2, p] * TU[4, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[4, p] * TU[2, p + 1]) + ((a1 * 0.16666666666666666 - 1.0) * TC[1, p] * TU[5, p + 1] + (a1 * 0.5 - 1.0) * TC[3, p] * TU[3, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[5, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 6)] = TX[6, p] - TX[6, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 30 * SERIES_TILE] = ((alpha * W[o + 6 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.16666666666666666 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[8, p] = (TU[6, p] - TU[6, p + 1]) * 0.017857142857142856
+        fl = W[_tw(p - 1, 30)] if p > 0 else 0.0
+        fr = W[_tw(p, 30)] if p < nc else 0.0
+        TX[8, p] = (fl - fr) * 0.017857142857142856
     for p in range(nc):
-        ck = TX[7, p] - TX[7, p + 1]
-        TC[7, p] = ck
-        TU[7, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2857142857142857 - 1.0) * TC[2, p] * TU[5, p + 1] + (a1 * 0.5714285714285714 - 1.0) * TC[4, p] * TU[3, p + 1] + (a1 * 0.8571428571428571 - 1.0) * TC[6, p] * TU[1, p + 1]) + ((a1 * 0.14285714285714285 - 1.0) * TC[1, p] * TU[6, p + 1] + (a1 * 0.42857142857142855 - 1.0) * TC[3, p] * TU[4, p + 1] + (a1 * 0.7142857142857143 - 1.0) * TC[5, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 7)] = TX[7, p] - TX[7, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 31 * SERIES_TILE] = ((alpha * W[o + 7 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.14285714285714285 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[9, p] = (TU[7, p] - TU[7, p + 1]) * 0.013888888888888888
+        fl = W[_tw(p - 1, 31)] if p > 0 else 0.0
+        fr = W[_tw(p, 31)] if p < nc else 0.0
+        TX[9, p] = (fl - fr) * 0.013888888888888888
     for p in range(nc):
-        ck = TX[8, p] - TX[8, p + 1]
-        TC[8, p] = ck
-        TU[8, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.25 - 1.0) * TC[2, p] * TU[6, p + 1] + (a1 * 0.5 - 1.0) * TC[4, p] * TU[4, p + 1] + (a1 * 0.75 - 1.0) * TC[6, p] * TU[2, p + 1]) + ((a1 * 0.125 - 1.0) * TC[1, p] * TU[7, p + 1] + (a1 * 0.375 - 1.0) * TC[3, p] * TU[5, p + 1] + (a1 * 0.625 - 1.0) * TC[5, p] * TU[3, p + 1] + (a1 * 0.875 - 1.0) * TC[7, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 8)] = TX[8, p] - TX[8, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 32 * SERIES_TILE] = ((alpha * W[o + 8 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.125 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[10, p] = (TU[8, p] - TU[8, p + 1]) * 0.011111111111111112
+        fl = W[_tw(p - 1, 32)] if p > 0 else 0.0
+        fr = W[_tw(p, 32)] if p < nc else 0.0
+        TX[10, p] = (fl - fr) * 0.011111111111111112
     for p in range(nc):
-        ck = TX[9, p] - TX[9, p + 1]
-        TC[9, p] = ck
-        TU[9, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2222222222222222 - 1.0) * TC[2, p] * TU[7, p + 1] + (a1 * 0.4444444444444444 - 1.0) * TC[4, p] * TU[5, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[6, p] * TU[3, p + 1] + (a1 * 0.8888888888888888 - 1.0) * TC[8, p] * TU[1, p + 1]) + ((a1 * 0.1111111111111111 - 1.0) * TC[1, p] * TU[8, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[3, p] * TU[6, p + 1] + (a1 * 0.5555555555555556 - 1.0) * TC[5, p] * TU[4, p + 1] + (a1 * 0.7777777777777778 - 1.0) * TC[7, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 9)] = TX[9, p] - TX[9, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 33 * SERIES_TILE] = ((alpha * W[o + 9 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.1111111111111111 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[11, p] = (TU[9, p] - TU[9, p + 1]) * 0.00909090909090909
+        fl = W[_tw(p - 1, 33)] if p > 0 else 0.0
+        fr = W[_tw(p, 33)] if p < nc else 0.0
+        TX[11, p] = (fl - fr) * 0.00909090909090909
     for p in range(nc):
-        ck = TX[10, p] - TX[10, p + 1]
-        TC[10, p] = ck
-        TU[10, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.2 - 1.0) * TC[2, p] * TU[8, p + 1] + (a1 * 0.4 - 1.0) * TC[4, p] * TU[6, p + 1] + (a1 * 0.6 - 1.0) * TC[6, p] * TU[4, p + 1] + (a1 * 0.8 - 1.0) * TC[8, p] * TU[2, p + 1]) + ((a1 * 0.1 - 1.0) * TC[1, p] * TU[9, p + 1] + (a1 * 0.3 - 1.0) * TC[3, p] * TU[7, p + 1] + (a1 * 0.5 - 1.0) * TC[5, p] * TU[5, p + 1] + (a1 * 0.7 - 1.0) * TC[7, p] * TU[3, p + 1] + (a1 * 0.9 - 1.0) * TC[9, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 10)] = TX[10, p] - TX[10, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 34 * SERIES_TILE] = ((alpha * W[o + 10 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.1 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[12, p] = (TU[10, p] - TU[10, p + 1]) * 0.007575757575757576
+        fl = W[_tw(p - 1, 34)] if p > 0 else 0.0
+        fr = W[_tw(p, 34)] if p < nc else 0.0
+        TX[12, p] = (fl - fr) * 0.007575757575757576
     for p in range(nc):
-        ck = TX[11, p] - TX[11, p + 1]
-        TC[11, p] = ck
-        TU[11, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.18181818181818182 - 1.0) * TC[2, p] * TU[9, p + 1] + (a1 * 0.36363636363636365 - 1.0) * TC[4, p] * TU[7, p + 1] + (a1 * 0.5454545454545454 - 1.0) * TC[6, p] * TU[5, p + 1] + (a1 * 0.7272727272727273 - 1.0) * TC[8, p] * TU[3, p + 1] + (a1 * 0.9090909090909091 - 1.0) * TC[10, p] * TU[1, p + 1]) + ((a1 * 0.09090909090909091 - 1.0) * TC[1, p] * TU[10, p + 1] + (a1 * 0.2727272727272727 - 1.0) * TC[3, p] * TU[8, p + 1] + (a1 * 0.45454545454545453 - 1.0) * TC[5, p] * TU[6, p + 1] + (a1 * 0.6363636363636364 - 1.0) * TC[7, p] * TU[4, p + 1] + (a1 * 0.8181818181818182 - 1.0) * TC[9, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 11)] = TX[11, p] - TX[11, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 35 * SERIES_TILE] = ((alpha * W[o + 11 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.09090909090909091 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[13, p] = (TU[11, p] - TU[11, p + 1]) * 0.00641025641025641
+        fl = W[_tw(p - 1, 35)] if p > 0 else 0.0
+        fr = W[_tw(p, 35)] if p < nc else 0.0
+        TX[13, p] = (fl - fr) * 0.00641025641025641
     for p in range(nc):
-        ck = TX[12, p] - TX[12, p + 1]
-        TC[12, p] = ck
-        TU[12, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.16666666666666666 - 1.0) * TC[2, p] * TU[10, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[4, p] * TU[8, p + 1] + (a1 * 0.5 - 1.0) * TC[6, p] * TU[6, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[8, p] * TU[4, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[10, p] * TU[2, p + 1]) + ((a1 * 0.08333333333333333 - 1.0) * TC[1, p] * TU[11, p + 1] + (a1 * 0.25 - 1.0) * TC[3, p] * TU[9, p + 1] + (a1 * 0.4166666666666667 - 1.0) * TC[5, p] * TU[7, p + 1] + (a1 * 0.5833333333333334 - 1.0) * TC[7, p] * TU[5, p + 1] + (a1 * 0.75 - 1.0) * TC[9, p] * TU[3, p + 1] + (a1 * 0.9166666666666666 - 1.0) * TC[11, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 12)] = TX[12, p] - TX[12, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 36 * SERIES_TILE] = ((alpha * W[o + 12 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.08333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.4166666666666667 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5833333333333334 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9166666666666666 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[14, p] = (TU[12, p] - TU[12, p + 1]) * 0.005494505494505495
+        fl = W[_tw(p - 1, 36)] if p > 0 else 0.0
+        fr = W[_tw(p, 36)] if p < nc else 0.0
+        TX[14, p] = (fl - fr) * 0.005494505494505495
     for p in range(nc):
-        ck = TX[13, p] - TX[13, p + 1]
-        TC[13, p] = ck
-        TU[13, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.15384615384615385 - 1.0) * TC[2, p] * TU[11, p + 1] + (a1 * 0.3076923076923077 - 1.0) * TC[4, p] * TU[9, p + 1] + (a1 * 0.46153846153846156 - 1.0) * TC[6, p] * TU[7, p + 1] + (a1 * 0.6153846153846154 - 1.0) * TC[8, p] * TU[5, p + 1] + (a1 * 0.7692307692307693 - 1.0) * TC[10, p] * TU[3, p + 1] + (a1 * 0.9230769230769231 - 1.0) * TC[12, p] * TU[1, p + 1]) + ((a1 * 0.07692307692307693 - 1.0) * TC[1, p] * TU[12, p + 1] + (a1 * 0.23076923076923078 - 1.0) * TC[3, p] * TU[10, p + 1] + (a1 * 0.38461538461538464 - 1.0) * TC[5, p] * TU[8, p + 1] + (a1 * 0.5384615384615384 - 1.0) * TC[7, p] * TU[6, p + 1] + (a1 * 0.6923076923076923 - 1.0) * TC[9, p] * TU[4, p + 1] + (a1 * 0.8461538461538461 - 1.0) * TC[11, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 13)] = TX[13, p] - TX[13, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 37 * SERIES_TILE] = ((alpha * W[o + 13 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.15384615384615385 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.3076923076923077 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.46153846153846156 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6153846153846154 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7692307692307693 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9230769230769231 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.07692307692307693 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.23076923076923078 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.38461538461538464 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5384615384615384 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6923076923076923 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8461538461538461 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[15, p] = (TU[13, p] - TU[13, p + 1]) * 0.004761904761904762
+        fl = W[_tw(p - 1, 37)] if p > 0 else 0.0
+        fr = W[_tw(p, 37)] if p < nc else 0.0
+        TX[15, p] = (fl - fr) * 0.004761904761904762
     for p in range(nc):
-        ck = TX[14, p] - TX[14, p + 1]
-        TC[14, p] = ck
-        TU[14, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.14285714285714285 - 1.0) * TC[2, p] * TU[12, p + 1] + (a1 * 0.2857142857142857 - 1.0) * TC[4, p] * TU[10, p + 1] + (a1 * 0.42857142857142855 - 1.0) * TC[6, p] * TU[8, p + 1] + (a1 * 0.5714285714285714 - 1.0) * TC[8, p] * TU[6, p + 1] + (a1 * 0.7142857142857143 - 1.0) * TC[10, p] * TU[4, p + 1] + (a1 * 0.8571428571428571 - 1.0) * TC[12, p] * TU[2, p + 1]) + ((a1 * 0.07142857142857142 - 1.0) * TC[1, p] * TU[13, p + 1] + (a1 * 0.21428571428571427 - 1.0) * TC[3, p] * TU[11, p + 1] + (a1 * 0.35714285714285715 - 1.0) * TC[5, p] * TU[9, p + 1] + (a1 * 0.5 - 1.0) * TC[7, p] * TU[7, p + 1] + (a1 * 0.6428571428571429 - 1.0) * TC[9, p] * TU[5, p + 1] + (a1 * 0.7857142857142857 - 1.0) * TC[11, p] * TU[3, p + 1] + (a1 * 0.9285714285714286 - 1.0) * TC[13, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 14)] = TX[14, p] - TX[14, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 38 * SERIES_TILE] = ((alpha * W[o + 14 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.07142857142857142 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.21428571428571427 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.35714285714285715 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6428571428571429 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7857142857142857 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9285714285714286 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[16, p] = (TU[14, p] - TU[14, p + 1]) * 0.004166666666666667
+        fl = W[_tw(p - 1, 38)] if p > 0 else 0.0
+        fr = W[_tw(p, 38)] if p < nc else 0.0
+        TX[16, p] = (fl - fr) * 0.004166666666666667
     for p in range(nc):
-        ck = TX[15, p] - TX[15, p + 1]
-        TC[15, p] = ck
-        TU[15, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.13333333333333333 - 1.0) * TC[2, p] * TU[13, p + 1] + (a1 * 0.26666666666666666 - 1.0) * TC[4, p] * TU[11, p + 1] + (a1 * 0.4 - 1.0) * TC[6, p] * TU[9, p + 1] + (a1 * 0.5333333333333333 - 1.0) * TC[8, p] * TU[7, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[10, p] * TU[5, p + 1] + (a1 * 0.8 - 1.0) * TC[12, p] * TU[3, p + 1] + (a1 * 0.9333333333333333 - 1.0) * TC[14, p] * TU[1, p + 1]) + ((a1 * 0.06666666666666667 - 1.0) * TC[1, p] * TU[14, p + 1] + (a1 * 0.2 - 1.0) * TC[3, p] * TU[12, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[5, p] * TU[10, p + 1] + (a1 * 0.4666666666666667 - 1.0) * TC[7, p] * TU[8, p + 1] + (a1 * 0.6 - 1.0) * TC[9, p] * TU[6, p + 1] + (a1 * 0.7333333333333333 - 1.0) * TC[11, p] * TU[4, p + 1] + (a1 * 0.8666666666666667 - 1.0) * TC[13, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 15)] = TX[15, p] - TX[15, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 39 * SERIES_TILE] = ((alpha * W[o + 15 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.13333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.26666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5333333333333333 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9333333333333333 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.06666666666666667 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.4666666666666667 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7333333333333333 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8666666666666667 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[17, p] = (TU[15, p] - TU[15, p + 1]) * 0.003676470588235294
+        fl = W[_tw(p - 1, 39)] if p > 0 else 0.0
+        fr = W[_tw(p, 39)] if p < nc else 0.0
+        TX[17, p] = (fl - fr) * 0.003676470588235294
     for p in range(nc):
-        ck = TX[16, p] - TX[16, p + 1]
-        TC[16, p] = ck
-        TU[16, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.125 - 1.0) * TC[2, p] * TU[14, p + 1] + (a1 * 0.25 - 1.0) * TC[4, p] * TU[12, p + 1] + (a1 * 0.375 - 1.0) * TC[6, p] * TU[10, p + 1] + (a1 * 0.5 - 1.0) * TC[8, p] * TU[8, p + 1] + (a1 * 0.625 - 1.0) * TC[10, p] * TU[6, p + 1] + (a1 * 0.75 - 1.0) * TC[12, p] * TU[4, p + 1] + (a1 * 0.875 - 1.0) * TC[14, p] * TU[2, p + 1]) + ((a1 * 0.0625 - 1.0) * TC[1, p] * TU[15, p + 1] + (a1 * 0.1875 - 1.0) * TC[3, p] * TU[13, p + 1] + (a1 * 0.3125 - 1.0) * TC[5, p] * TU[11, p + 1] + (a1 * 0.4375 - 1.0) * TC[7, p] * TU[9, p + 1] + (a1 * 0.5625 - 1.0) * TC[9, p] * TU[7, p + 1] + (a1 * 0.6875 - 1.0) * TC[11, p] * TU[5, p + 1] + (a1 * 0.8125 - 1.0) * TC[13, p] * TU[3, p + 1] + (a1 * 0.9375 - 1.0) * TC[15, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 16)] = TX[16, p] - TX[16, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 40 * SERIES_TILE] = ((alpha * W[o + 16 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.125 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.0625 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.1875 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3125 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4375 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5625 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6875 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8125 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9375 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[18, p] = (TU[16, p] - TU[16, p + 1]) * 0.0032679738562091504
+        fl = W[_tw(p - 1, 40)] if p > 0 else 0.0
+        fr = W[_tw(p, 40)] if p < nc else 0.0
+        TX[18, p] = (fl - fr) * 0.0032679738562091504
     for p in range(nc):
-        ck = TX[17, p] - TX[17, p + 1]
-        TC[17, p] = ck
-        TU[17, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.11764705882352941 - 1.0) * TC[2, p] * TU[15, p + 1] + (a1 * 0.23529411764705882 - 1.0) * TC[4, p] * TU[13, p + 1] + (a1 * 0.35294117647058826 - 1.0) * TC[6, p] * TU[11, p + 1] + (a1 * 0.47058823529411764 - 1.0) * TC[8, p] * TU[9, p + 1] + (a1 * 0.5882352941176471 - 1.0) * TC[10, p] * TU[7, p + 1] + (a1 * 0.7058823529411765 - 1.0) * TC[12, p] * TU[5, p + 1] + (a1 * 0.8235294117647058 - 1.0) * TC[14, p] * TU[3, p + 1] + (a1 * 0.9411764705882353 - 1.0) * TC[16, p] * TU[1, p + 1]) + ((a1 * 0.058823529411764705 - 1.0) * TC[1, p] * TU[16, p + 1] + (a1 * 0.17647058823529413 - 1.0) * TC[3, p] * TU[14, p + 1] + (a1 * 0.29411764705882354 - 1.0) * TC[5, p] * TU[12, p + 1] + (a1 * 0.4117647058823529 - 1.0) * TC[7, p] * TU[10, p + 1] + (a1 * 0.5294117647058824 - 1.0) * TC[9, p] * TU[8, p + 1] + (a1 * 0.6470588235294118 - 1.0) * TC[11, p] * TU[6, p + 1] + (a1 * 0.7647058823529411 - 1.0) * TC[13, p] * TU[4, p + 1] + (a1 * 0.8823529411764706 - 1.0) * TC[15, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 17)] = TX[17, p] - TX[17, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 41 * SERIES_TILE] = ((alpha * W[o + 17 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.11764705882352941 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.23529411764705882 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.35294117647058826 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.47058823529411764 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5882352941176471 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7058823529411765 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8235294117647058 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9411764705882353 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.058823529411764705 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.17647058823529413 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.29411764705882354 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4117647058823529 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5294117647058824 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6470588235294118 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7647058823529411 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8823529411764706 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[19, p] = (TU[17, p] - TU[17, p + 1]) * 0.0029239766081871343
+        fl = W[_tw(p - 1, 41)] if p > 0 else 0.0
+        fr = W[_tw(p, 41)] if p < nc else 0.0
+        TX[19, p] = (fl - fr) * 0.0029239766081871343
     for p in range(nc):
-        ck = TX[18, p] - TX[18, p + 1]
-        TC[18, p] = ck
-        TU[18, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.1111111111111111 - 1.0) * TC[2, p] * TU[16, p + 1] + (a1 * 0.2222222222222222 - 1.0) * TC[4, p] * TU[14, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[6, p] * TU[12, p + 1] + (a1 * 0.4444444444444444 - 1.0) * TC[8, p] * TU[10, p + 1] + (a1 * 0.5555555555555556 - 1.0) * TC[10, p] * TU[8, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[12, p] * TU[6, p + 1] + (a1 * 0.7777777777777778 - 1.0) * TC[14, p] * TU[4, p + 1] + (a1 * 0.8888888888888888 - 1.0) * TC[16, p] * TU[2, p + 1]) + ((a1 * 0.05555555555555555 - 1.0) * TC[1, p] * TU[17, p + 1] + (a1 * 0.16666666666666666 - 1.0) * TC[3, p] * TU[15, p + 1] + (a1 * 0.2777777777777778 - 1.0) * TC[5, p] * TU[13, p + 1] + (a1 * 0.3888888888888889 - 1.0) * TC[7, p] * TU[11, p + 1] + (a1 * 0.5 - 1.0) * TC[9, p] * TU[9, p + 1] + (a1 * 0.6111111111111112 - 1.0) * TC[11, p] * TU[7, p + 1] + (a1 * 0.7222222222222222 - 1.0) * TC[13, p] * TU[5, p + 1] + (a1 * 0.8333333333333334 - 1.0) * TC[15, p] * TU[3, p + 1] + (a1 * 0.9444444444444444 - 1.0) * TC[17, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 18)] = TX[18, p] - TX[18, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 42 * SERIES_TILE] = ((alpha * W[o + 18 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.1111111111111111 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05555555555555555 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.2777777777777778 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3888888888888889 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6111111111111112 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7222222222222222 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9444444444444444 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[20, p] = (TU[18, p] - TU[18, p + 1]) * 0.002631578947368421
+        fl = W[_tw(p - 1, 42)] if p > 0 else 0.0
+        fr = W[_tw(p, 42)] if p < nc else 0.0
+        TX[20, p] = (fl - fr) * 0.002631578947368421
     for p in range(nc):
-        ck = TX[19, p] - TX[19, p + 1]
-        TC[19, p] = ck
-        TU[19, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.10526315789473684 - 1.0) * TC[2, p] * TU[17, p + 1] + (a1 * 0.21052631578947367 - 1.0) * TC[4, p] * TU[15, p + 1] + (a1 * 0.3157894736842105 - 1.0) * TC[6, p] * TU[13, p + 1] + (a1 * 0.42105263157894735 - 1.0) * TC[8, p] * TU[11, p + 1] + (a1 * 0.5263157894736842 - 1.0) * TC[10, p] * TU[9, p + 1] + (a1 * 0.631578947368421 - 1.0) * TC[12, p] * TU[7, p + 1] + (a1 * 0.7368421052631579 - 1.0) * TC[14, p] * TU[5, p + 1] + (a1 * 0.8421052631578947 - 1.0) * TC[16, p] * TU[3, p + 1] + (a1 * 0.9473684210526315 - 1.0) * TC[18, p] * TU[1, p + 1]) + ((a1 * 0.05263157894736842 - 1.0) * TC[1, p] * TU[18, p + 1] + (a1 * 0.15789473684210525 - 1.0) * TC[3, p] * TU[16, p + 1] + (a1 * 0.2631578947368421 - 1.0) * TC[5, p] * TU[14, p + 1] + (a1 * 0.3684210526315789 - 1.0) * TC[7, p] * TU[12, p + 1] + (a1 * 0.47368421052631576 - 1.0) * TC[9, p] * TU[10, p + 1] + (a1 * 0.5789473684210527 - 1.0) * TC[11, p] * TU[8, p + 1] + (a1 * 0.6842105263157895 - 1.0) * TC[13, p] * TU[6, p + 1] + (a1 * 0.7894736842105263 - 1.0) * TC[15, p] * TU[4, p + 1] + (a1 * 0.8947368421052632 - 1.0) * TC[17, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 19)] = TX[19, p] - TX[19, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 43 * SERIES_TILE] = ((alpha * W[o + 19 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.10526315789473684 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.21052631578947367 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3157894736842105 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.42105263157894735 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5263157894736842 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.631578947368421 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7368421052631579 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8421052631578947 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9473684210526315 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.05263157894736842 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.15789473684210525 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2631578947368421 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3684210526315789 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.47368421052631576 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5789473684210527 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6842105263157895 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7894736842105263 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8947368421052632 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[21, p] = (TU[19, p] - TU[19, p + 1]) * 0.002380952380952381
+        fl = W[_tw(p - 1, 43)] if p > 0 else 0.0
+        fr = W[_tw(p, 43)] if p < nc else 0.0
+        TX[21, p] = (fl - fr) * 0.002380952380952381
     for p in range(nc):
-        ck = TX[20, p] - TX[20, p + 1]
-        TC[20, p] = ck
-        TU[20, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.1 - 1.0) * TC[2, p] * TU[18, p + 1] + (a1 * 0.2 - 1.0) * TC[4, p] * TU[16, p + 1] + (a1 * 0.3 - 1.0) * TC[6, p] * TU[14, p + 1] + (a1 * 0.4 - 1.0) * TC[8, p] * TU[12, p + 1] + (a1 * 0.5 - 1.0) * TC[10, p] * TU[10, p + 1] + (a1 * 0.6 - 1.0) * TC[12, p] * TU[8, p + 1] + (a1 * 0.7 - 1.0) * TC[14, p] * TU[6, p + 1] + (a1 * 0.8 - 1.0) * TC[16, p] * TU[4, p + 1] + (a1 * 0.9 - 1.0) * TC[18, p] * TU[2, p + 1]) + ((a1 * 0.05 - 1.0) * TC[1, p] * TU[19, p + 1] + (a1 * 0.15 - 1.0) * TC[3, p] * TU[17, p + 1] + (a1 * 0.25 - 1.0) * TC[5, p] * TU[15, p + 1] + (a1 * 0.35 - 1.0) * TC[7, p] * TU[13, p + 1] + (a1 * 0.45 - 1.0) * TC[9, p] * TU[11, p + 1] + (a1 * 0.55 - 1.0) * TC[11, p] * TU[9, p + 1] + (a1 * 0.65 - 1.0) * TC[13, p] * TU[7, p + 1] + (a1 * 0.75 - 1.0) * TC[15, p] * TU[5, p + 1] + (a1 * 0.85 - 1.0) * TC[17, p] * TU[3, p + 1] + (a1 * 0.95 - 1.0) * TC[19, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 20)] = TX[20, p] - TX[20, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 44 * SERIES_TILE] = ((alpha * W[o + 20 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.1 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.15 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.35 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.45 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.55 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.65 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.85 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.95 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[22, p] = (TU[20, p] - TU[20, p + 1]) * 0.0021645021645021645
+        fl = W[_tw(p - 1, 44)] if p > 0 else 0.0
+        fr = W[_tw(p, 44)] if p < nc else 0.0
+        TX[22, p] = (fl - fr) * 0.0021645021645021645
     for p in range(nc):
-        ck = TX[21, p] - TX[21, p + 1]
-        TC[21, p] = ck
-        TU[21, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.09523809523809523 - 1.0) * TC[2, p] * TU[19, p + 1] + (a1 * 0.19047619047619047 - 1.0) * TC[4, p] * TU[17, p + 1] + (a1 * 0.2857142857142857 - 1.0) * TC[6, p] * TU[15, p + 1] + (a1 * 0.38095238095238093 - 1.0) * TC[8, p] * TU[13, p + 1] + (a1 * 0.47619047619047616 - 1.0) * TC[10, p] * TU[11, p + 1] + (a1 * 0.5714285714285714 - 1.0) * TC[12, p] * TU[9, p + 1] + (a1 * 0.6666666666666666 - 1.0) * TC[14, p] * TU[7, p + 1] + (a1 * 0.7619047619047619 - 1.0) * TC[16, p] * TU[5, p + 1] + (a1 * 0.8571428571428571 - 1.0) * TC[18, p] * TU[3, p + 1] + (a1 * 0.9523809523809523 - 1.0) * TC[20, p] * TU[1, p + 1]) + ((a1 * 0.047619047619047616 - 1.0) * TC[1, p] * TU[20, p + 1] + (a1 * 0.14285714285714285 - 1.0) * TC[3, p] * TU[18, p + 1] + (a1 * 0.23809523809523808 - 1.0) * TC[5, p] * TU[16, p + 1] + (a1 * 0.3333333333333333 - 1.0) * TC[7, p] * TU[14, p + 1] + (a1 * 0.42857142857142855 - 1.0) * TC[9, p] * TU[12, p + 1] + (a1 * 0.5238095238095238 - 1.0) * TC[11, p] * TU[10, p + 1] + (a1 * 0.6190476190476191 - 1.0) * TC[13, p] * TU[8, p + 1] + (a1 * 0.7142857142857143 - 1.0) * TC[15, p] * TU[6, p + 1] + (a1 * 0.8095238095238095 - 1.0) * TC[17, p] * TU[4, p + 1] + (a1 * 0.9047619047619048 - 1.0) * TC[19, p] * TU[2, p + 1])) * RC[p]
+        W[_tw(p, 21)] = TX[21, p] - TX[21, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 45 * SERIES_TILE] = ((alpha * W[o + 21 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.09523809523809523 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.19047619047619047 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.38095238095238093 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.47619047619047616 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7619047619047619 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9523809523809523 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.047619047619047616 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.23809523809523808 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5238095238095238 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6190476190476191 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8095238095238095 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9047619047619048 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[23, p] = (TU[21, p] - TU[21, p + 1]) * 0.001976284584980237
+        fl = W[_tw(p - 1, 45)] if p > 0 else 0.0
+        fr = W[_tw(p, 45)] if p < nc else 0.0
+        TX[23, p] = (fl - fr) * 0.001976284584980237
     for p in range(nc):
-        ck = TX[22, p] - TX[22, p + 1]
-        TC[22, p] = ck
-        TU[22, p + 1] = ((alpha * ck * TU[0, p + 1] + (a1 * 0.09090909090909091 - 1.0) * TC[2, p] * TU[20, p + 1] + (a1 * 0.18181818181818182 - 1.0) * TC[4, p] * TU[18, p + 1] + (a1 * 0.2727272727272727 - 1.0) * TC[6, p] * TU[16, p + 1] + (a1 * 0.36363636363636365 - 1.0) * TC[8, p] * TU[14, p + 1] + (a1 * 0.45454545454545453 - 1.0) * TC[10, p] * TU[12, p + 1] + (a1 * 0.5454545454545454 - 1.0) * TC[12, p] * TU[10, p + 1] + (a1 * 0.6363636363636364 - 1.0) * TC[14, p] * TU[8, p + 1] + (a1 * 0.7272727272727273 - 1.0) * TC[16, p] * TU[6, p + 1] + (a1 * 0.8181818181818182 - 1.0) * TC[18, p] * TU[4, p + 1] + (a1 * 0.9090909090909091 - 1.0) * TC[20, p] * TU[2, p + 1]) + ((a1 * 0.045454545454545456 - 1.0) * TC[1, p] * TU[21, p + 1] + (a1 * 0.13636363636363635 - 1.0) * TC[3, p] * TU[19, p + 1] + (a1 * 0.22727272727272727 - 1.0) * TC[5, p] * TU[17, p + 1] + (a1 * 0.3181818181818182 - 1.0) * TC[7, p] * TU[15, p + 1] + (a1 * 0.4090909090909091 - 1.0) * TC[9, p] * TU[13, p + 1] + (a1 * 0.5 - 1.0) * TC[11, p] * TU[11, p + 1] + (a1 * 0.5909090909090909 - 1.0) * TC[13, p] * TU[9, p + 1] + (a1 * 0.6818181818181818 - 1.0) * TC[15, p] * TU[7, p + 1] + (a1 * 0.7727272727272727 - 1.0) * TC[17, p] * TU[5, p + 1] + (a1 * 0.8636363636363636 - 1.0) * TC[19, p] * TU[3, p + 1] + (a1 * 0.9545454545454546 - 1.0) * TC[21, p] * TU[1, p + 1])) * RC[p]
+        W[_tw(p, 22)] = TX[22, p] - TX[22, p + 1]
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            W[o + 46 * SERIES_TILE] = ((alpha * W[o + 22 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.09090909090909091 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.045454545454545456 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.13636363636363635 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.22727272727272727 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3181818181818182 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.4090909090909091 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5909090909090909 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6818181818181818 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7727272727272727 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8636363636363636 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9545454545454546 - 1.0) * W[o + 21 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        TX[24, p] = (TU[22, p] - TU[22, p + 1]) * 0.0018115942028985507
+        fl = W[_tw(p - 1, 46)] if p > 0 else 0.0
+        fr = W[_tw(p, 46)] if p < nc else 0.0
+        TX[24, p] = (fl - fr) * 0.0018115942028985507
 
 
 @njit(fastmath={"contract"})
@@ -693,6 +788,12 @@ def _series_bounds(TX, LO, HI, nc, h):
 # ---- END GENERATED STAGES ----
 
 
+@njit(inline="always")
+def _tw(p, r):
+    """Index in the work tiles TW of row r of contact lane p."""
+    return (p // SERIES_TILE) * TILE_STRIDE + r * SERIES_TILE + p % SERIES_TILE
+
+
 @njit(fastmath={"contract"})
 def _taylor(S):
     """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
@@ -710,7 +811,7 @@ def _taylor(S):
     is a contact lane whose force is masked to 0. The lanes are independent, so the
     loops vectorise, where a loop over one contact's orders would be one long chain;
     each order's sum over the lower ones is written out (_series_orders, generated
-    by _codegen), one pass over the window per order.
+    by _codegen), one pass over the window's tiles per order.
 
     Returns the longest step whose truncation (estimated by the last two terms of x
     and of v) is within TAYLOR_TOL of the tolerance, or 0 where the series does not
@@ -721,8 +822,7 @@ def _taylor(S):
     nc = m - 1  # contact lanes: lane p joins compact balls p and p + 1
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    TX, TC, TU = S.TX, S.TC, S.TU
-    MK, RC = S.TR[R_MASK], S.TR[R_INV]
+    TX, W, MK = S.TX, S.TW, S.TR[R_MASK]
     X0, V0 = S.X0, S.V0
     for p in range(m):
         TX[0, p] = X0[p]
@@ -732,27 +832,29 @@ def _taylor(S):
         o = S.coff[c]
         for p in range(o, o + S.chi[c] - S.clo[c]):
             MK[p] = 1.0
-    # TU is shifted by one lane: TU[k, p + 1] is the force of contact lane p, and
-    # columns 0 and m stay 0, so that every ball's acceleration is one difference
-    for k in range(PT - 1):
-        TU[k, m] = 0.0
+    # the last tile's spare lanes carry no force
+    for p in range(nc, (nc + SERIES_TILE - 1) // SERIES_TILE * SERIES_TILE):
+        W[_tw(p, PT)] = 0.0
+        W[_tw(p, 2 * PT)] = 0.0
     for p in range(nc):
         c0 = X0[p] - X0[p + 1]
         if c0 == 0.0 and MK[p] != 0.0 and mode != 0:
             return 0.0
-        TU[0, p + 1] = _force(c0, mode, alpha) * MK[p]
-        RC[p] = MK[p] / c0 if MK[p] != 0.0 and mode != 0 else 0.0
+        W[_tw(p, PT)] = _force(c0, mode, alpha) * MK[p]
+        W[_tw(p, 2 * PT)] = MK[p] / c0 if MK[p] != 0.0 and mode != 0 else 0.0
     for p in range(m):
-        TX[2, p] = 0.5 * (TU[0, p] - TU[0, p + 1])
+        fl = W[_tw(p - 1, PT)] if p > 0 else 0.0
+        fr = W[_tw(p, PT)] if p < nc else 0.0
+        TX[2, p] = 0.5 * (fl - fr)
     if mode == 0:
         for k in range(1, PT - 1):
-            for p in range(nc):
-                TU[k, p + 1] = (TX[k, p] - TX[k, p + 1]) * MK[p]
             s = 1.0 / ((k + 1) * (k + 2))
             for p in range(m):
-                TX[k + 2, p] = (TU[k, p] - TU[k, p + 1]) * s
+                fl = (TX[k, p - 1] - TX[k, p]) * MK[p - 1] if p > 0 else 0.0
+                fr = (TX[k, p] - TX[k, p + 1]) * MK[p] if p < nc else 0.0
+                TX[k + 2, p] = (fl - fr) * s
     else:
-        _series_orders(TX, TC, TU, RC, nc, m, alpha)
+        _series_orders(TX, W, nc, m, alpha)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
@@ -1520,6 +1622,23 @@ def _contact_event(S, j, hcap):
     ns = N_SERIES_SAMPLES if tay else N_SAMPLES
     if tay:
         _sample_series(S, ns, h)
+        # each crossing below needs a sample on the level's far side: when none is,
+        # the scan would find nothing (its common outcome), so skip it
+        smin = min(c0, c1)
+        smax = max(c0, c1)
+        for i in range(ns):
+            smin = min(smin, S.TS[1, i])
+            smax = max(smax, S.TS[1, i])
+        if st == ACTIVE:
+            clear = smin > lev1
+        elif st == FRESH:
+            clear = smin > 0.0
+        elif st == DORMANT:
+            clear = smax < lev1 and smin > lev2
+        else:
+            clear = smax < 0.0 and smax < lev2
+        if clear:
+            return 2.0, 0, 0.0
     pressed = c0 > lev1  # (a fresh contact's press beyond eps_rel)
     ta = 0.0
     ca = c0
