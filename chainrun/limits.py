@@ -44,9 +44,9 @@ __all__ = [
 STATE_BYTES_PER_BALL = 12 * 8 + 16 + 17 + 12
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages x 8), ``FX, FV``
-#: (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work tiles ``TW`` (49 rows
-#: x 8) and lane scratch ``TR`` (3 x 8).
-WINDOW_BYTES_PER_BALL = 10 * 8 + 16 * 8 + 2 * 7 * 8 + (25 + 49 + 3) * 8
+#: (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work tiles ``TW`` (51 rows
+#: x 8) and lane mask ``TR`` (8).
+WINDOW_BYTES_PER_BALL = 10 * 8 + 16 * 8 + 2 * 7 * 8 + (25 + 51 + 1) * 8
 #: Initial window (``_driver._INITIAL_WINDOW``); it grows with the width of the
 #: compressed region, which stays far below N (about N**(1/3) for alpha = 1).
 WINDOW_MIN = 256

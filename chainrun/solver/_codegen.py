@@ -119,7 +119,7 @@ def _series(pt: int) -> list[str]:
 
     f_k = (alpha c_k f_0 + sum_{j=1..k-1} ((alpha+1) j / k - 1) c_j f_{k-j}) / c_0, the
     recurrence of _taylor with 1/k folded into its weights, on the work tiles TW
-    (rows c_k at k, f_k at pt + k, 1/c_0 at 2 pt; see _tw). Within a tile every row is
+    (rows c_k at k, f_k at pt + 1 + k, 1/c_0 at 2 pt; see _tw). Within a tile every row is
     at a fixed offset, so the pass over a tile reads and writes one array at known
     distances: the compiler vectorises it with no run-time overlap checks, which on a
     dozen lanes cost more than the sums.
@@ -132,8 +132,9 @@ def _series(pt: int) -> list[str]:
         "    nt = (nc + SERIES_TILE - 1) // SERIES_TILE",
     ]
     for k in range(1, pt - 1):
-        terms = [f"alpha * W[o + {k} * SERIES_TILE] * W[o + {pt} * SERIES_TILE]"] + [
-            f"(a1 * {j / k!r} - 1.0) * W[o + {j} * SERIES_TILE] * W[o + {pt + k - j} * SERIES_TILE]"
+        f = pt + 1  # row of f_0
+        terms = [f"alpha * W[o + {k} * SERIES_TILE] * W[o + {f} * SERIES_TILE]"] + [
+            f"(a1 * {j / k!r} - 1.0) * W[o + {j} * SERIES_TILE] * W[o + {f + k - j} * SERIES_TILE]"
             for j in range(1, k)]
         lines += [
             "    for p in range(nc):",
@@ -141,12 +142,18 @@ def _series(pt: int) -> list[str]:
             "    for t in range(nt):",
             "        for lane in range(SERIES_TILE):",
             "            o = t * TILE_STRIDE + lane",
-            f"            W[o + {pt + k} * SERIES_TILE] = ({_chains(terms)}) * W[o + {2 * pt} * SERIES_TILE]",
+            f"            W[o + {f + k} * SERIES_TILE] = ({_chains(terms)}) * W[o + {2 * pt} * SERIES_TILE]",
             "    for p in range(m):",
-            f"        fl = W[_tw(p - 1, {pt + k})] if p > 0 else 0.0",
-            f"        fr = W[_tw(p, {pt + k})] if p < nc else 0.0",
+            f"        fl = W[_tw(p - 1, {f + k})] if p > 0 else 0.0",
+            f"        fr = W[_tw(p, {f + k})] if p < nc else 0.0",
             f"        TX[{k + 2}, p] = (fl - fr) * {1.0 / ((k + 1) * (k + 2))!r}",
         ]
+    lines += [
+        "    # the compressions' last two orders, for the bounds (_series_bounds)",
+        "    for p in range(nc):",
+        f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",
+        f"        W[_tw(p, {pt})] = TX[{pt}, p] - TX[{pt}, p + 1]",
+    ]
     return lines
 
 
@@ -154,32 +161,36 @@ def _bounds(pt: int, db: int) -> list[str]:
     """Bernstein bounds of every contact lane's compression over a series step."""
     lines = [
         "@njit(fastmath={\"contract\"})",
-        "def _series_bounds(TX, LO, HI, nc, h):",
+        "def _series_bounds(W, nc, h):",
         '    """Bounds of every contact lane\'s compression over a series step [0, h].',
         "",
-        "    Into LO, HI: the hull of the Bernstein coefficients of the lane's series up to",
-        "    degree DB, widened by the magnitude of the higher terms and by rounding, as",
-        "    _bernstein_range does for one contact.",
+        "    From the rows c_k of the work tiles into their rows LO_ROW, HI_ROW: the hull",
+        "    of the Bernstein coefficients of the lane's series up to degree DB, widened",
+        "    by the magnitude of the higher terms and by rounding, as _bernstein_range",
+        "    does for one contact.",
         '    """',
+        "    nt = (nc + SERIES_TILE - 1) // SERIES_TILE",
         "    h1 = h",
     ]
     lines += [f"    h{k} = h{k - 1} * h" for k in range(2, pt + 1)]
     lines += [
-        "    for p in range(nc):",
-        "        a0 = TX[0, p] - TX[0, p + 1]",
+        "    for t in range(nt):",
+        "        for lane in range(SERIES_TILE):",
+        "            o = t * TILE_STRIDE + lane",
+        "            a0 = W[o]",
     ]
-    lines += [f"        a{k} = (TX[{k}, p] - TX[{k}, p + 1]) * h{k}" for k in range(1, pt + 1)]
+    lines += [f"            a{k} = W[o + {k} * SERIES_TILE] * h{k}" for k in range(1, pt + 1)]
     low = [f"abs(a{k})" for k in range(db + 1)]
     high = [f"abs(a{k})" for k in range(db + 1, pt + 1)]
-    lines.append(f"        r = 64.0 * EPS * ({_chains(low)}) + {_chains(high)}")
+    lines.append(f"            r = 64.0 * EPS * ({_chains(low)}) + {_chains(high)}")
     for i in range(1, db + 1):
         terms = ["a0"] + [f"{math.comb(i, k) / math.comb(db, k)!r} * a{k}"
                           for k in range(1, i + 1)]
-        lines.append(f"        b{i} = {_chains(terms)}")
+        lines.append(f"            b{i} = {_chains(terms)}")
     bs = ", ".join(["a0"] + [f"b{i}" for i in range(1, db + 1)])
     lines += [
-        f"        LO[p] = min({bs}) - r",
-        f"        HI[p] = max({bs}) + r",
+        f"            W[o + LO_ROW * SERIES_TILE] = min({bs}) - r",
+        f"            W[o + HI_ROW * SERIES_TILE] = max({bs}) + r",
     ]
     return lines
 

@@ -75,7 +75,7 @@ def _alloc_window(cap: int) -> dict:
         FS=np.zeros(cap), KV=np.zeros((K._NSE, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
         TX=np.zeros((K.PT + 1, cap)), TW=np.zeros(-(-cap // K.SERIES_TILE) * K.TILE_STRIDE),
-        TR=np.zeros((K.N_LANE_ROWS, cap)),
+        TR=np.zeros(cap),
         TD=np.zeros(K.PT + 1), TS=np.zeros((2, K.N_SERIES_SAMPLES)),
     )
 

@@ -113,14 +113,15 @@ LEVEL_LOCATE = 1e-16
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
 N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
-# rows of the lane scratch TR: a contact lane's mask (1 inside a cluster, _taylor);
-# the bounds of its compression over a series step (_series_bounds)
-R_MASK, R_LO, R_HI, N_LANE_ROWS = range(4)
 # the series' work tiles TW (see _tw): lanes in tiles of SERIES_TILE, each tile holding
-# TILE_ROWS rows: the compressions' series c_k (rows k < PT), the forces' f_k (rows
-# PT + k) and 1 / c_0 (row 2 PT)
+# TILE_ROWS rows: the compressions' series c_k (rows k <= PT), the forces' f_k (rows
+# PT + 1 + k), 1 / c_0 (row 2 PT), and the bounds of the compression over a series step
+# (rows LO_ROW, HI_ROW, _series_bounds); TR holds each contact lane's mask (1 inside a
+# cluster, _taylor)
 SERIES_TILE = 16
-TILE_ROWS = 2 * PT + 1
+LO_ROW = 2 * PT + 1
+HI_ROW = 2 * PT + 2
+TILE_ROWS = 2 * PT + 3
 TILE_STRIDE = TILE_ROWS * SERIES_TILE
 #: the step after an event, as a fraction of the step that crossed it (measured on
 #: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
@@ -149,7 +150,7 @@ State = namedtuple(
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
         # the stamp of the step they were built for (DM, see _dense_at); the Taylor
         # series of the positions (TX), order-major (see _taylor), with the work tiles
-        # of the compressions' and forces' series (TW, see _tw) and lane scratch (TR),
+        # of the compressions' and forces' series (TW, see _tw) and lane mask (TR),
         # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
         "TX", "TW", "TR", "TD", "TS",
@@ -497,231 +498,237 @@ def _series_orders(TX, W, nc, m, alpha):
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 25 * SERIES_TILE] = (alpha * W[o + 1 * SERIES_TILE] * W[o + 24 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
+            W[o + 26 * SERIES_TILE] = (alpha * W[o + 1 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 25)] if p > 0 else 0.0
-        fr = W[_tw(p, 25)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 26)] if p > 0 else 0.0
+        fr = W[_tw(p, 26)] if p < nc else 0.0
         TX[3, p] = (fl - fr) * 0.16666666666666666
     for p in range(nc):
         W[_tw(p, 2)] = TX[2, p] - TX[2, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 26 * SERIES_TILE] = (alpha * W[o + 2 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
+            W[o + 27 * SERIES_TILE] = (alpha * W[o + 2 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 26)] if p > 0 else 0.0
-        fr = W[_tw(p, 26)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 27)] if p > 0 else 0.0
+        fr = W[_tw(p, 27)] if p < nc else 0.0
         TX[4, p] = (fl - fr) * 0.08333333333333333
     for p in range(nc):
         W[_tw(p, 3)] = TX[3, p] - TX[3, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 27 * SERIES_TILE] = (alpha * W[o + 3 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 26 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
+            W[o + 28 * SERIES_TILE] = (alpha * W[o + 3 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 27)] if p > 0 else 0.0
-        fr = W[_tw(p, 27)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 28)] if p > 0 else 0.0
+        fr = W[_tw(p, 28)] if p < nc else 0.0
         TX[5, p] = (fl - fr) * 0.05
     for p in range(nc):
         W[_tw(p, 4)] = TX[4, p] - TX[4, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 28 * SERIES_TILE] = ((alpha * W[o + 4 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.25 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 29 * SERIES_TILE] = ((alpha * W[o + 4 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.25 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 28)] if p > 0 else 0.0
-        fr = W[_tw(p, 28)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 29)] if p > 0 else 0.0
+        fr = W[_tw(p, 29)] if p < nc else 0.0
         TX[6, p] = (fl - fr) * 0.03333333333333333
     for p in range(nc):
         W[_tw(p, 5)] = TX[5, p] - TX[5, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 29 * SERIES_TILE] = ((alpha * W[o + 5 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.2 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 30 * SERIES_TILE] = ((alpha * W[o + 5 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.2 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 29)] if p > 0 else 0.0
-        fr = W[_tw(p, 29)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 30)] if p > 0 else 0.0
+        fr = W[_tw(p, 30)] if p < nc else 0.0
         TX[7, p] = (fl - fr) * 0.023809523809523808
     for p in range(nc):
         W[_tw(p, 6)] = TX[6, p] - TX[6, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 30 * SERIES_TILE] = ((alpha * W[o + 6 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.16666666666666666 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 31 * SERIES_TILE] = ((alpha * W[o + 6 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.16666666666666666 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 30)] if p > 0 else 0.0
-        fr = W[_tw(p, 30)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 31)] if p > 0 else 0.0
+        fr = W[_tw(p, 31)] if p < nc else 0.0
         TX[8, p] = (fl - fr) * 0.017857142857142856
     for p in range(nc):
         W[_tw(p, 7)] = TX[7, p] - TX[7, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 31 * SERIES_TILE] = ((alpha * W[o + 7 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.14285714285714285 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 32 * SERIES_TILE] = ((alpha * W[o + 7 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.14285714285714285 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 31)] if p > 0 else 0.0
-        fr = W[_tw(p, 31)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 32)] if p > 0 else 0.0
+        fr = W[_tw(p, 32)] if p < nc else 0.0
         TX[9, p] = (fl - fr) * 0.013888888888888888
     for p in range(nc):
         W[_tw(p, 8)] = TX[8, p] - TX[8, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 32 * SERIES_TILE] = ((alpha * W[o + 8 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.125 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 33 * SERIES_TILE] = ((alpha * W[o + 8 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.125 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 32)] if p > 0 else 0.0
-        fr = W[_tw(p, 32)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 33)] if p > 0 else 0.0
+        fr = W[_tw(p, 33)] if p < nc else 0.0
         TX[10, p] = (fl - fr) * 0.011111111111111112
     for p in range(nc):
         W[_tw(p, 9)] = TX[9, p] - TX[9, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 33 * SERIES_TILE] = ((alpha * W[o + 9 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.1111111111111111 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 34 * SERIES_TILE] = ((alpha * W[o + 9 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.1111111111111111 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 33)] if p > 0 else 0.0
-        fr = W[_tw(p, 33)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 34)] if p > 0 else 0.0
+        fr = W[_tw(p, 34)] if p < nc else 0.0
         TX[11, p] = (fl - fr) * 0.00909090909090909
     for p in range(nc):
         W[_tw(p, 10)] = TX[10, p] - TX[10, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 34 * SERIES_TILE] = ((alpha * W[o + 10 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.1 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 35 * SERIES_TILE] = ((alpha * W[o + 10 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.1 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 34)] if p > 0 else 0.0
-        fr = W[_tw(p, 34)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 35)] if p > 0 else 0.0
+        fr = W[_tw(p, 35)] if p < nc else 0.0
         TX[12, p] = (fl - fr) * 0.007575757575757576
     for p in range(nc):
         W[_tw(p, 11)] = TX[11, p] - TX[11, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 35 * SERIES_TILE] = ((alpha * W[o + 11 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.09090909090909091 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 36 * SERIES_TILE] = ((alpha * W[o + 11 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.09090909090909091 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 35)] if p > 0 else 0.0
-        fr = W[_tw(p, 35)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 36)] if p > 0 else 0.0
+        fr = W[_tw(p, 36)] if p < nc else 0.0
         TX[13, p] = (fl - fr) * 0.00641025641025641
     for p in range(nc):
         W[_tw(p, 12)] = TX[12, p] - TX[12, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 36 * SERIES_TILE] = ((alpha * W[o + 12 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.08333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.4166666666666667 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5833333333333334 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9166666666666666 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 37 * SERIES_TILE] = ((alpha * W[o + 12 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.08333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.4166666666666667 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5833333333333334 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9166666666666666 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 36)] if p > 0 else 0.0
-        fr = W[_tw(p, 36)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 37)] if p > 0 else 0.0
+        fr = W[_tw(p, 37)] if p < nc else 0.0
         TX[14, p] = (fl - fr) * 0.005494505494505495
     for p in range(nc):
         W[_tw(p, 13)] = TX[13, p] - TX[13, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 37 * SERIES_TILE] = ((alpha * W[o + 13 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.15384615384615385 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.3076923076923077 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.46153846153846156 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6153846153846154 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7692307692307693 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9230769230769231 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.07692307692307693 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.23076923076923078 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.38461538461538464 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5384615384615384 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6923076923076923 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8461538461538461 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 38 * SERIES_TILE] = ((alpha * W[o + 13 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.15384615384615385 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.3076923076923077 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.46153846153846156 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6153846153846154 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7692307692307693 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9230769230769231 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.07692307692307693 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.23076923076923078 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.38461538461538464 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5384615384615384 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6923076923076923 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8461538461538461 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 37)] if p > 0 else 0.0
-        fr = W[_tw(p, 37)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 38)] if p > 0 else 0.0
+        fr = W[_tw(p, 38)] if p < nc else 0.0
         TX[15, p] = (fl - fr) * 0.004761904761904762
     for p in range(nc):
         W[_tw(p, 14)] = TX[14, p] - TX[14, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 38 * SERIES_TILE] = ((alpha * W[o + 14 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.07142857142857142 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.21428571428571427 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.35714285714285715 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6428571428571429 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7857142857142857 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9285714285714286 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 39 * SERIES_TILE] = ((alpha * W[o + 14 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.07142857142857142 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.21428571428571427 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.35714285714285715 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6428571428571429 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7857142857142857 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9285714285714286 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 38)] if p > 0 else 0.0
-        fr = W[_tw(p, 38)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 39)] if p > 0 else 0.0
+        fr = W[_tw(p, 39)] if p < nc else 0.0
         TX[16, p] = (fl - fr) * 0.004166666666666667
     for p in range(nc):
         W[_tw(p, 15)] = TX[15, p] - TX[15, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 39 * SERIES_TILE] = ((alpha * W[o + 15 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.13333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.26666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5333333333333333 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9333333333333333 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.06666666666666667 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.4666666666666667 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7333333333333333 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8666666666666667 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 40 * SERIES_TILE] = ((alpha * W[o + 15 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.13333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.26666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5333333333333333 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9333333333333333 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.06666666666666667 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4666666666666667 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7333333333333333 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8666666666666667 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 39)] if p > 0 else 0.0
-        fr = W[_tw(p, 39)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 40)] if p > 0 else 0.0
+        fr = W[_tw(p, 40)] if p < nc else 0.0
         TX[17, p] = (fl - fr) * 0.003676470588235294
     for p in range(nc):
         W[_tw(p, 16)] = TX[16, p] - TX[16, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 40 * SERIES_TILE] = ((alpha * W[o + 16 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.125 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.0625 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.1875 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3125 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4375 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5625 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6875 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8125 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9375 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 41 * SERIES_TILE] = ((alpha * W[o + 16 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.125 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.0625 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.1875 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3125 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4375 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5625 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6875 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8125 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9375 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 40)] if p > 0 else 0.0
-        fr = W[_tw(p, 40)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 41)] if p > 0 else 0.0
+        fr = W[_tw(p, 41)] if p < nc else 0.0
         TX[18, p] = (fl - fr) * 0.0032679738562091504
     for p in range(nc):
         W[_tw(p, 17)] = TX[17, p] - TX[17, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 41 * SERIES_TILE] = ((alpha * W[o + 17 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.11764705882352941 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.23529411764705882 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.35294117647058826 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.47058823529411764 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5882352941176471 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7058823529411765 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8235294117647058 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9411764705882353 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.058823529411764705 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.17647058823529413 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.29411764705882354 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4117647058823529 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5294117647058824 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6470588235294118 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7647058823529411 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8823529411764706 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 42 * SERIES_TILE] = ((alpha * W[o + 17 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.11764705882352941 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.23529411764705882 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.35294117647058826 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.47058823529411764 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5882352941176471 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7058823529411765 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8235294117647058 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9411764705882353 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.058823529411764705 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.17647058823529413 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.29411764705882354 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.4117647058823529 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5294117647058824 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6470588235294118 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7647058823529411 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8823529411764706 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 41)] if p > 0 else 0.0
-        fr = W[_tw(p, 41)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 42)] if p > 0 else 0.0
+        fr = W[_tw(p, 42)] if p < nc else 0.0
         TX[19, p] = (fl - fr) * 0.0029239766081871343
     for p in range(nc):
         W[_tw(p, 18)] = TX[18, p] - TX[18, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 42 * SERIES_TILE] = ((alpha * W[o + 18 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.1111111111111111 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05555555555555555 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.2777777777777778 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3888888888888889 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6111111111111112 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7222222222222222 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9444444444444444 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 43 * SERIES_TILE] = ((alpha * W[o + 18 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.1111111111111111 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.05555555555555555 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2777777777777778 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3888888888888889 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6111111111111112 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7222222222222222 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9444444444444444 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 42)] if p > 0 else 0.0
-        fr = W[_tw(p, 42)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 43)] if p > 0 else 0.0
+        fr = W[_tw(p, 43)] if p < nc else 0.0
         TX[20, p] = (fl - fr) * 0.002631578947368421
     for p in range(nc):
         W[_tw(p, 19)] = TX[19, p] - TX[19, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 43 * SERIES_TILE] = ((alpha * W[o + 19 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.10526315789473684 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.21052631578947367 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3157894736842105 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.42105263157894735 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5263157894736842 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.631578947368421 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7368421052631579 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8421052631578947 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9473684210526315 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.05263157894736842 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.15789473684210525 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2631578947368421 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3684210526315789 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.47368421052631576 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5789473684210527 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6842105263157895 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7894736842105263 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8947368421052632 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 44 * SERIES_TILE] = ((alpha * W[o + 19 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.10526315789473684 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.21052631578947367 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3157894736842105 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.42105263157894735 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5263157894736842 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.631578947368421 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7368421052631579 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8421052631578947 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9473684210526315 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05263157894736842 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.15789473684210525 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2631578947368421 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3684210526315789 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.47368421052631576 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5789473684210527 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6842105263157895 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7894736842105263 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8947368421052632 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 43)] if p > 0 else 0.0
-        fr = W[_tw(p, 43)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 44)] if p > 0 else 0.0
+        fr = W[_tw(p, 44)] if p < nc else 0.0
         TX[21, p] = (fl - fr) * 0.002380952380952381
     for p in range(nc):
         W[_tw(p, 20)] = TX[20, p] - TX[20, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 44 * SERIES_TILE] = ((alpha * W[o + 20 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.1 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.15 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.35 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.45 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.55 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.65 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.85 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.95 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 45 * SERIES_TILE] = ((alpha * W[o + 20 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.1 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.05 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.15 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.35 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.45 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.55 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.65 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.85 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.95 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 44)] if p > 0 else 0.0
-        fr = W[_tw(p, 44)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 45)] if p > 0 else 0.0
+        fr = W[_tw(p, 45)] if p < nc else 0.0
         TX[22, p] = (fl - fr) * 0.0021645021645021645
     for p in range(nc):
         W[_tw(p, 21)] = TX[21, p] - TX[21, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 45 * SERIES_TILE] = ((alpha * W[o + 21 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.09523809523809523 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.19047619047619047 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.38095238095238093 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.47619047619047616 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7619047619047619 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9523809523809523 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) + ((a1 * 0.047619047619047616 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.23809523809523808 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5238095238095238 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6190476190476191 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8095238095238095 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9047619047619048 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 46 * SERIES_TILE] = ((alpha * W[o + 21 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.09523809523809523 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.19047619047619047 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.38095238095238093 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.47619047619047616 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7619047619047619 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9523809523809523 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.047619047619047616 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.23809523809523808 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5238095238095238 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6190476190476191 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8095238095238095 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9047619047619048 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 45)] if p > 0 else 0.0
-        fr = W[_tw(p, 45)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 46)] if p > 0 else 0.0
+        fr = W[_tw(p, 46)] if p < nc else 0.0
         TX[23, p] = (fl - fr) * 0.001976284584980237
     for p in range(nc):
         W[_tw(p, 22)] = TX[22, p] - TX[22, p + 1]
     for t in range(nt):
         for lane in range(SERIES_TILE):
             o = t * TILE_STRIDE + lane
-            W[o + 46 * SERIES_TILE] = ((alpha * W[o + 22 * SERIES_TILE] * W[o + 24 * SERIES_TILE] + (a1 * 0.09090909090909091 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.045454545454545456 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.13636363636363635 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.22727272727272727 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3181818181818182 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.4090909090909091 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5909090909090909 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6818181818181818 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7727272727272727 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8636363636363636 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.9545454545454546 - 1.0) * W[o + 21 * SERIES_TILE] * W[o + 25 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
+            W[o + 47 * SERIES_TILE] = ((alpha * W[o + 22 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.09090909090909091 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.045454545454545456 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 46 * SERIES_TILE] + (a1 * 0.13636363636363635 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.22727272727272727 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.3181818181818182 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.4090909090909091 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5909090909090909 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6818181818181818 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7727272727272727 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8636363636363636 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9545454545454546 - 1.0) * W[o + 21 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
     for p in range(m):
-        fl = W[_tw(p - 1, 46)] if p > 0 else 0.0
-        fr = W[_tw(p, 46)] if p < nc else 0.0
+        fl = W[_tw(p - 1, 47)] if p > 0 else 0.0
+        fr = W[_tw(p, 47)] if p < nc else 0.0
         TX[24, p] = (fl - fr) * 0.0018115942028985507
+    # the compressions' last two orders, for the bounds (_series_bounds)
+    for p in range(nc):
+        W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
+        W[_tw(p, 24)] = TX[24, p] - TX[24, p + 1]
 
 
 @njit(fastmath={"contract"})
-def _series_bounds(TX, LO, HI, nc, h):
+def _series_bounds(W, nc, h):
     """Bounds of every contact lane's compression over a series step [0, h].
 
-    Into LO, HI: the hull of the Bernstein coefficients of the lane's series up to
-    degree DB, widened by the magnitude of the higher terms and by rounding, as
-    _bernstein_range does for one contact.
+    From the rows c_k of the work tiles into their rows LO_ROW, HI_ROW: the hull
+    of the Bernstein coefficients of the lane's series up to degree DB, widened
+    by the magnitude of the higher terms and by rounding, as _bernstein_range
+    does for one contact.
     """
+    nt = (nc + SERIES_TILE - 1) // SERIES_TILE
     h1 = h
     h2 = h1 * h
     h3 = h2 * h
@@ -746,45 +753,47 @@ def _series_bounds(TX, LO, HI, nc, h):
     h22 = h21 * h
     h23 = h22 * h
     h24 = h23 * h
-    for p in range(nc):
-        a0 = TX[0, p] - TX[0, p + 1]
-        a1 = (TX[1, p] - TX[1, p + 1]) * h1
-        a2 = (TX[2, p] - TX[2, p + 1]) * h2
-        a3 = (TX[3, p] - TX[3, p + 1]) * h3
-        a4 = (TX[4, p] - TX[4, p + 1]) * h4
-        a5 = (TX[5, p] - TX[5, p + 1]) * h5
-        a6 = (TX[6, p] - TX[6, p + 1]) * h6
-        a7 = (TX[7, p] - TX[7, p + 1]) * h7
-        a8 = (TX[8, p] - TX[8, p + 1]) * h8
-        a9 = (TX[9, p] - TX[9, p + 1]) * h9
-        a10 = (TX[10, p] - TX[10, p + 1]) * h10
-        a11 = (TX[11, p] - TX[11, p + 1]) * h11
-        a12 = (TX[12, p] - TX[12, p + 1]) * h12
-        a13 = (TX[13, p] - TX[13, p + 1]) * h13
-        a14 = (TX[14, p] - TX[14, p + 1]) * h14
-        a15 = (TX[15, p] - TX[15, p + 1]) * h15
-        a16 = (TX[16, p] - TX[16, p + 1]) * h16
-        a17 = (TX[17, p] - TX[17, p + 1]) * h17
-        a18 = (TX[18, p] - TX[18, p + 1]) * h18
-        a19 = (TX[19, p] - TX[19, p + 1]) * h19
-        a20 = (TX[20, p] - TX[20, p + 1]) * h20
-        a21 = (TX[21, p] - TX[21, p + 1]) * h21
-        a22 = (TX[22, p] - TX[22, p + 1]) * h22
-        a23 = (TX[23, p] - TX[23, p + 1]) * h23
-        a24 = (TX[24, p] - TX[24, p + 1]) * h24
-        r = 64.0 * EPS * ((abs(a0) + abs(a2) + abs(a4) + abs(a6) + abs(a8) + abs(a10)) + (abs(a1) + abs(a3) + abs(a5) + abs(a7) + abs(a9))) + (abs(a11) + abs(a13) + abs(a15) + abs(a17) + abs(a19) + abs(a21) + abs(a23)) + (abs(a12) + abs(a14) + abs(a16) + abs(a18) + abs(a20) + abs(a22) + abs(a24))
-        b1 = a0 + 0.1 * a1
-        b2 = a0 + 0.2 * a1 + 0.022222222222222223 * a2
-        b3 = (a0 + 0.06666666666666667 * a2) + (0.3 * a1 + 0.008333333333333333 * a3)
-        b4 = (a0 + 0.13333333333333333 * a2 + 0.004761904761904762 * a4) + (0.4 * a1 + 0.03333333333333333 * a3)
-        b5 = (a0 + 0.2222222222222222 * a2 + 0.023809523809523808 * a4) + (0.5 * a1 + 0.08333333333333333 * a3 + 0.003968253968253968 * a5)
-        b6 = (a0 + 0.3333333333333333 * a2 + 0.07142857142857142 * a4 + 0.004761904761904762 * a6) + (0.6 * a1 + 0.16666666666666666 * a3 + 0.023809523809523808 * a5)
-        b7 = (a0 + 0.4666666666666667 * a2 + 0.16666666666666666 * a4 + 0.03333333333333333 * a6) + (0.7 * a1 + 0.2916666666666667 * a3 + 0.08333333333333333 * a5 + 0.008333333333333333 * a7)
-        b8 = (a0 + 0.6222222222222222 * a2 + 0.3333333333333333 * a4 + 0.13333333333333333 * a6 + 0.022222222222222223 * a8) + (0.8 * a1 + 0.4666666666666667 * a3 + 0.2222222222222222 * a5 + 0.06666666666666667 * a7)
-        b9 = (a0 + 0.8 * a2 + 0.6 * a4 + 0.4 * a6 + 0.2 * a8) + (0.9 * a1 + 0.7 * a3 + 0.5 * a5 + 0.3 * a7 + 0.1 * a9)
-        b10 = (a0 + 1.0 * a2 + 1.0 * a4 + 1.0 * a6 + 1.0 * a8 + 1.0 * a10) + (1.0 * a1 + 1.0 * a3 + 1.0 * a5 + 1.0 * a7 + 1.0 * a9)
-        LO[p] = min(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) - r
-        HI[p] = max(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) + r
+    for t in range(nt):
+        for lane in range(SERIES_TILE):
+            o = t * TILE_STRIDE + lane
+            a0 = W[o]
+            a1 = W[o + 1 * SERIES_TILE] * h1
+            a2 = W[o + 2 * SERIES_TILE] * h2
+            a3 = W[o + 3 * SERIES_TILE] * h3
+            a4 = W[o + 4 * SERIES_TILE] * h4
+            a5 = W[o + 5 * SERIES_TILE] * h5
+            a6 = W[o + 6 * SERIES_TILE] * h6
+            a7 = W[o + 7 * SERIES_TILE] * h7
+            a8 = W[o + 8 * SERIES_TILE] * h8
+            a9 = W[o + 9 * SERIES_TILE] * h9
+            a10 = W[o + 10 * SERIES_TILE] * h10
+            a11 = W[o + 11 * SERIES_TILE] * h11
+            a12 = W[o + 12 * SERIES_TILE] * h12
+            a13 = W[o + 13 * SERIES_TILE] * h13
+            a14 = W[o + 14 * SERIES_TILE] * h14
+            a15 = W[o + 15 * SERIES_TILE] * h15
+            a16 = W[o + 16 * SERIES_TILE] * h16
+            a17 = W[o + 17 * SERIES_TILE] * h17
+            a18 = W[o + 18 * SERIES_TILE] * h18
+            a19 = W[o + 19 * SERIES_TILE] * h19
+            a20 = W[o + 20 * SERIES_TILE] * h20
+            a21 = W[o + 21 * SERIES_TILE] * h21
+            a22 = W[o + 22 * SERIES_TILE] * h22
+            a23 = W[o + 23 * SERIES_TILE] * h23
+            a24 = W[o + 24 * SERIES_TILE] * h24
+            r = 64.0 * EPS * ((abs(a0) + abs(a2) + abs(a4) + abs(a6) + abs(a8) + abs(a10)) + (abs(a1) + abs(a3) + abs(a5) + abs(a7) + abs(a9))) + (abs(a11) + abs(a13) + abs(a15) + abs(a17) + abs(a19) + abs(a21) + abs(a23)) + (abs(a12) + abs(a14) + abs(a16) + abs(a18) + abs(a20) + abs(a22) + abs(a24))
+            b1 = a0 + 0.1 * a1
+            b2 = a0 + 0.2 * a1 + 0.022222222222222223 * a2
+            b3 = (a0 + 0.06666666666666667 * a2) + (0.3 * a1 + 0.008333333333333333 * a3)
+            b4 = (a0 + 0.13333333333333333 * a2 + 0.004761904761904762 * a4) + (0.4 * a1 + 0.03333333333333333 * a3)
+            b5 = (a0 + 0.2222222222222222 * a2 + 0.023809523809523808 * a4) + (0.5 * a1 + 0.08333333333333333 * a3 + 0.003968253968253968 * a5)
+            b6 = (a0 + 0.3333333333333333 * a2 + 0.07142857142857142 * a4 + 0.004761904761904762 * a6) + (0.6 * a1 + 0.16666666666666666 * a3 + 0.023809523809523808 * a5)
+            b7 = (a0 + 0.4666666666666667 * a2 + 0.16666666666666666 * a4 + 0.03333333333333333 * a6) + (0.7 * a1 + 0.2916666666666667 * a3 + 0.08333333333333333 * a5 + 0.008333333333333333 * a7)
+            b8 = (a0 + 0.6222222222222222 * a2 + 0.3333333333333333 * a4 + 0.13333333333333333 * a6 + 0.022222222222222223 * a8) + (0.8 * a1 + 0.4666666666666667 * a3 + 0.2222222222222222 * a5 + 0.06666666666666667 * a7)
+            b9 = (a0 + 0.8 * a2 + 0.6 * a4 + 0.4 * a6 + 0.2 * a8) + (0.9 * a1 + 0.7 * a3 + 0.5 * a5 + 0.3 * a7 + 0.1 * a9)
+            b10 = (a0 + 1.0 * a2 + 1.0 * a4 + 1.0 * a6 + 1.0 * a8 + 1.0 * a10) + (1.0 * a1 + 1.0 * a3 + 1.0 * a5 + 1.0 * a7 + 1.0 * a9)
+            W[o + LO_ROW * SERIES_TILE] = min(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) - r
+            W[o + HI_ROW * SERIES_TILE] = max(a0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10) + r
 # ---- END GENERATED STAGES ----
 
 
@@ -822,7 +831,7 @@ def _taylor(S):
     nc = m - 1  # contact lanes: lane p joins compact balls p and p + 1
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    TX, W, MK = S.TX, S.TW, S.TR[R_MASK]
+    TX, W, MK = S.TX, S.TW, S.TR
     X0, V0 = S.X0, S.V0
     for p in range(m):
         TX[0, p] = X0[p]
@@ -833,26 +842,31 @@ def _taylor(S):
         for p in range(o, o + S.chi[c] - S.clo[c]):
             MK[p] = 1.0
     # the last tile's spare lanes carry no force
+    f0 = PT + 1  # row of the forces' f_0
     for p in range(nc, (nc + SERIES_TILE - 1) // SERIES_TILE * SERIES_TILE):
-        W[_tw(p, PT)] = 0.0
+        W[_tw(p, f0)] = 0.0
         W[_tw(p, 2 * PT)] = 0.0
     for p in range(nc):
         c0 = X0[p] - X0[p + 1]
         if c0 == 0.0 and MK[p] != 0.0 and mode != 0:
             return 0.0
-        W[_tw(p, PT)] = _force(c0, mode, alpha) * MK[p]
+        W[_tw(p, 0)] = c0
+        W[_tw(p, f0)] = _force(c0, mode, alpha) * MK[p]
         W[_tw(p, 2 * PT)] = MK[p] / c0 if MK[p] != 0.0 and mode != 0 else 0.0
     for p in range(m):
-        fl = W[_tw(p - 1, PT)] if p > 0 else 0.0
-        fr = W[_tw(p, PT)] if p < nc else 0.0
+        fl = W[_tw(p - 1, f0)] if p > 0 else 0.0
+        fr = W[_tw(p, f0)] if p < nc else 0.0
         TX[2, p] = 0.5 * (fl - fr)
     if mode == 0:
-        for k in range(1, PT - 1):
-            s = 1.0 / ((k + 1) * (k + 2))
-            for p in range(m):
-                fl = (TX[k, p - 1] - TX[k, p]) * MK[p - 1] if p > 0 else 0.0
-                fr = (TX[k, p] - TX[k, p + 1]) * MK[p] if p < nc else 0.0
-                TX[k + 2, p] = (fl - fr) * s
+        for k in range(1, PT + 1):
+            for p in range(nc):
+                W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]
+            if k < PT - 1:
+                s = 1.0 / ((k + 1) * (k + 2))
+                for p in range(m):
+                    fl = W[_tw(p - 1, k)] * MK[p - 1] if p > 0 else 0.0
+                    fr = W[_tw(p, k)] * MK[p] if p < nc else 0.0
+                    TX[k + 2, p] = (fl - fr) * s
     else:
         _series_orders(TX, W, nc, m, alpha)
     # truncation: the last two terms of x and of v against the tolerance of each ball
@@ -1709,9 +1723,9 @@ def _find_event(S):
     h = S.fs[F_HLAST]
     q = 0.25 * h * h
     tay = S.ints[I_TAY] == 1
-    LO, HI = S.TR[R_LO], S.TR[R_HI]
+    W = S.TW
     if tay:
-        _series_bounds(S.TX, LO, HI, S.ints[I_M] - 1, h)
+        _series_bounds(W, S.ints[I_M] - 1, h)
     epsrel = S.fs[F_EPSREL]
     X, X0, A, A0 = S.X, S.X0, S.A, S.A0
     for c in range(S.ints[I_NCL]):
@@ -1727,7 +1741,7 @@ def _find_event(S):
                 # eps_rel): can it open in this step?
                 p = o + j
                 if tay:
-                    if LO[p] > 0.0 or (st == FRESH and HI[p] < epsrel):
+                    if W[_tw(p, LO_ROW)] > 0.0 or (st == FRESH and W[_tw(p, HI_ROW)] < epsrel):
                         continue
                 elif st == FRESH:
                     continue  # checked at the step's end (_release_quiet)
