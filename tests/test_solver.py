@@ -439,6 +439,22 @@ def test_a_contact_pressed_and_opened_inside_one_step_is_located():
     assert np.all(np.diff(sol.event_time) > 0)
 
 
+@pytest.mark.parametrize("n", [250, 1000])
+def test_a_hertz_wave_leaves_every_contact_open_behind_it(n):
+    """A Hertz line struck by one ball: the solitary wave presses each contact once and
+    leaves it open, so the run ends when the wave leaves the far end, with the last
+    contact's opening. A contact pressed while every step of the wave's passage ended
+    on an event or an engagement at the front used to stay fresh (unseasoned) and
+    hold two balls together, at relative speeds far below the floor, until t = 1381
+    for N = 250."""
+    sol = run(n, 1, 1.5)
+    last = np.argmax(sol.event_time)
+    assert sol.event_contact[last] == n - 2
+    assert sol.end_time == sol.event_time[last]
+    assert sol.end_time < 1.25 * n
+    assert sol.diagnostics.max_window < 20
+
+
 @pytest.mark.parametrize("alpha", [1.0, 1.5])
 def test_gap_closing_within_the_time_resolution(alpha):
     """Late in a long run t is resolved only to about 1e-12: two free balls whose gap

@@ -1855,8 +1855,30 @@ def _apply_event(S, j, kind):
 
 
 @njit
+def _season(S):
+    """Season the fresh contacts pressed beyond eps_rel in the last step (made ACTIVE).
+
+    After every accepted step, whatever else it brings: a wave presses a fresh contact
+    and passes on within a few steps, each of which may end on an event or an
+    engagement at the front.
+    """
+    epsrel = S.fs[F_EPSREL]
+    tay = S.ints[I_TAY] == 1 and S.ints[I_JUMP] == 0
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        lo = S.clo[c]
+        for j in range(lo, S.chi[c]):
+            if S.cst[j] == FRESH:
+                p = o + j - lo
+                if S.X[p] - S.X[p + 1] > epsrel:
+                    S.cst[j] = ACTIVE
+                elif tay and _pressed_in_step(S, j):
+                    S.cst[j] = ACTIVE  # pressed beyond eps_rel inside the step
+
+
+@njit
 def _release_quiet(S):
-    """Season contacts pressed beyond eps_rel; release those below the floor.
+    """Release the contacts below the floor.
 
     A seasoned contact is released when its relative motion and stored energy could
     not produce a speed above the floor (w^2 + 4 c^(alpha+1)/(alpha+1) < floor^2) and
@@ -1867,7 +1889,6 @@ def _release_quiet(S):
     floor = S.fs[F_FLOOR]
     epsrel = S.fs[F_EPSREL]
     alpha = S.fs[F_ALPHA]
-    tay = S.ints[I_TAY] == 1 and S.ints[I_JUMP] == 0
     nrel = 0
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
@@ -1877,11 +1898,7 @@ def _release_quiet(S):
             st = S.cst[j]
             cj = S.X[p] - S.X[p + 1]
             if st == FRESH:
-                if cj > epsrel:
-                    S.cst[j] = ACTIVE
-                elif tay and _pressed_in_step(S, j):
-                    S.cst[j] = ACTIVE  # pressed beyond eps_rel inside the step
-                elif cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
+                if cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
                     S.jbuf[nrel] = j
                     nrel += 1
             elif st == ACTIVE and cj < epsrel:
@@ -1987,7 +2004,9 @@ def _settle(S):
 
 @njit
 def _post_step(S):
-    """After an accepted step or jump: apply its event, or season and release contacts."""
+    """After an accepted step or jump: season contacts, then apply its event or release contacts."""
+    if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
+        _season(S)
     k = S.ints[I_EVK]
     if k != 0:
         S.ints[I_EVK] = 0
