@@ -1872,8 +1872,10 @@ def _season(S):
                 p = o + j - lo
                 if S.X[p] - S.X[p + 1] > epsrel:
                     S.cst[j] = ACTIVE
-                elif tay and _pressed_in_step(S, j):
-                    S.cst[j] = ACTIVE  # pressed beyond eps_rel inside the step
+                elif tay and S.TW[_tw(p, HI_ROW)] > epsrel and _pressed_in_step(S, j):
+                    # pressed beyond eps_rel inside the step (a candidate only if its
+                    # bound over the step, from the event scan, reaches eps_rel)
+                    S.cst[j] = ACTIVE
 
 
 @njit
