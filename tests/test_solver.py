@@ -428,6 +428,34 @@ def test_bernstein_range_holds_the_polynomial():
     assert K._bernstein_range(decay, 1.0, scratch)[0] > 0.0
 
 
+@pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
+    (60, 1, 1.5, 20.0), (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0), (40, 2, 2.3, 12.0),
+])
+def test_window_bounds_hold_every_contacts_compression(n, k, alpha, t_end):
+    """The event scan skips a contact whose window-wide bound over a series step
+    (_series_bounds, on the work tiles) excludes its level: every lane's compression,
+    evaluated by numpy from the positions' series, lies within its bound, and an
+    opening contact is not excluded."""
+    from chainrun.solver import _kernels as K
+
+    S = _stopped_state(n, k, alpha, t_end)
+    m = int(S.ints[K.I_M])
+    K._save_start(S)
+    h = K._taylor(S)
+    assert h > 0.0
+    for step in (h, 0.3 * h, 2.0 * h):  # the event scan's step, shorter or longer
+        K._series_bounds(S.TW, m - 1, step)
+        s = np.linspace(0.0, step, 2001)
+        for p in range(m - 1):
+            c = np.polynomial.polynomial.polyval(s, S.TX[:, p] - S.TX[:, p + 1])
+            lo = S.TW[K._tw(p, K.LO_ROW)]
+            hi = S.TW[K._tw(p, K.HI_ROW)]
+            scale = 1e-14 * np.abs(c).max()
+            assert lo <= c.min() + scale and c.max() - scale <= hi
+            if c.min() < -scale:
+                assert lo < 0.0
+
+
 def test_a_contact_pressed_and_opened_inside_one_step_is_located():
     """On a linear line struck by one ball each contact opens once, in order along the
     line. A series step is long enough for a contact engaged at the front to be pressed
