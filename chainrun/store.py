@@ -33,6 +33,8 @@ import datetime as _dt
 import json
 import os
 import re
+import zlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable
@@ -78,7 +80,8 @@ H5MD_VERSION = (1, 1)
 BALL_CHUNK = 2**16
 #: Arrays with more elements than this are chunked and compressed.
 COMPRESS_ABOVE = 4096
-_GZIP = dict(compression="gzip", compression_opts=1, shuffle=True)
+_GZIP_LEVEL = 1
+_GZIP = dict(compression="gzip", compression_opts=_GZIP_LEVEL, shuffle=True)
 
 # HDF5 1.8 object headers: large attributes (the config text) go to dense storage.
 _LIBVER = "v108"
@@ -161,14 +164,71 @@ def _scale(group: h5py.Group, name: str, data: np.ndarray, long_name: str) -> h5
     return ds
 
 
+_deflate_pool: ThreadPoolExecutor | None = None
+
+
+def _forget_deflate_pool() -> None:
+    # a forked child inherits the pool object but none of its threads
+    global _deflate_pool
+    _deflate_pool = None
+
+
+os.register_at_fork(after_in_child=_forget_deflate_pool)
+
+
+def _deflate_chunk(chunk: np.ndarray) -> bytes:
+    """One chunk through HDF5's shuffle and deflate filters, in that order.
+
+    Shuffle stores the elements' first bytes, then their second bytes, and so on
+    (H5Zshuffle.c); deflate is a zlib stream at the dataset's level.
+    """
+    size = chunk.dtype.itemsize
+    planes = np.ascontiguousarray(chunk).view(np.uint8).reshape(-1, size).T
+    return zlib.compress(np.ascontiguousarray(planes), _GZIP_LEVEL)
+
+
+def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -> None:
+    """Write ``data`` into ``ds[lead + (...)]`` chunk by chunk, compressing on every core.
+
+    ``ds`` was created with ``_GZIP`` and chunks that span ``data``'s trailing axes and
+    cut its first axis. h5py would compress the chunks one after another inside one
+    write; zlib releases the GIL, so a pool of threads compresses them side by side and
+    each is stored as it is (``write_direct_chunk``). The edge chunk is padded with
+    zeros to the full chunk shape, as HDF5 stores it.
+    """
+    global _deflate_pool
+    if _deflate_pool is None:
+        _deflate_pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1,
+                                           thread_name_prefix="chainrun-deflate")
+    chunk_shape = ds.chunks[len(lead):]
+    step = chunk_shape[0]
+    data = np.asarray(data, dtype=ds.dtype)
+
+    def pack(start: int) -> bytes:
+        part = data[start:start + step]
+        if part.shape != chunk_shape:
+            full = np.zeros(chunk_shape, dtype=ds.dtype)
+            full[:len(part)] = part
+            part = full
+        return _deflate_chunk(part.reshape((1,) * len(lead) + chunk_shape))
+
+    starts = range(0, data.shape[0], step)
+    rest = (0,) * (len(chunk_shape) - 1)
+    for start, blob in zip(starts, _deflate_pool.map(pack, starts)):
+        ds.id.write_direct_chunk(lead + (start,) + rest, blob)
+
+
 def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],
            long_name: str, dtype=None) -> h5py.Dataset:
     """A fixed-size dataset, chunked and compressed when large, with dims attached."""
     data = np.asarray(data, dtype=dtype)
-    opts: dict[str, Any] = {}
-    if data.size > COMPRESS_ABOVE:
-        opts = dict(chunks=(min(data.shape[0], BALL_CHUNK),) + data.shape[1:], **_GZIP)
-    ds = group.create_dataset(name, data=data, **opts)
+    if data.size > COMPRESS_ABOVE and data.dtype.kind in "biuf":
+        ds = group.create_dataset(name, shape=data.shape, dtype=data.dtype,
+                                  chunks=(min(data.shape[0], BALL_CHUNK),) + data.shape[1:],
+                                  **_GZIP)
+        _write_deflated(ds, (), data)
+    else:
+        ds = group.create_dataset(name, data=data)
     for axis, scale in enumerate(scales):
         ds.dims[axis].attach_scale(scale)
     ds.attrs["long_name"] = long_name
@@ -365,7 +425,10 @@ class _Element:
             ds.resize(row + 1, axis=0)
         self.time[row] = t
         self.step[row] = step
-        self.value[row] = value
+        if self.value.compression is None:
+            self.value[row] = value
+        else:
+            _write_deflated(self.value, (row,), value)
 
 
 class RunWriter:

@@ -6,6 +6,7 @@ The solutions here are built by hand (no solver): small N, a few snapshots and e
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import re
 from pathlib import Path
@@ -321,15 +322,18 @@ def test_snapshot_hook_copies_the_arrays_it_is_given(tmp_path):
 
 
 def test_large_arrays_are_chunked_and_compressed(tmp_path):
+    # two chunks along the balls, the second one short: HDF5 itself decodes what the
+    # writer compressed chunk by chunk, so any slip of the shuffle or the padding shows
     n = 2**16 + 100
     spec = make_spec(n=n, times=(0.0, 1.0))
     sol = make_solution(spec, events=5000, keep_snapshots=False)
     path = tmp_path / "big.h5"
     x = np.zeros(n)
     x[:3] = [2e-3, 1e-3, 0.0]
+    v = np.random.default_rng(1).normal(size=(2, n))
     with store.RunWriter(path, spec, velocity_floor=1e-12) as w:
         for i, t in enumerate(spec.times):
-            w.snapshot(i, t, x, np.zeros(n))
+            w.snapshot(i, t, x, v[i])
         w.finish(sol)
     with h5py.File(path, "r") as f:
         for name in ("position", "velocity"):
@@ -343,6 +347,35 @@ def test_large_arrays_are_chunked_and_compressed(tmp_path):
             assert ds.chunks is not None and ds.compression == "gzip", name
         assert f["events/time"].shape == (5000,)
         assert f["observables/potential_energy/value"][0] == pytest.approx(2 * 1e-3**2.5 / 2.5)
+        np.testing.assert_array_equal(f["particles/chain/position/value"][:, :, 0], [x, x])
+        np.testing.assert_array_equal(f["particles/chain/velocity/value"][:, :, 0], v)
+        for name in ("final_velocity", "final_position", "separation_time"):
+            np.testing.assert_array_equal(f[f"results/{name}"][:], getattr(sol, name))
+        np.testing.assert_array_equal(f["results/ball"][:], np.arange(1, n + 1))
+        np.testing.assert_array_equal(f["events/time"][:], sol.event_time)
+        np.testing.assert_array_equal(f["events/contact"][:], sol.event_contact)
+        np.testing.assert_array_equal(f["events/kind"][:], sol.event_kind)
+
+
+def _write_big(path):
+    with h5py.File(path, "w") as f:
+        store._array(f, "x", np.arange(3.0 * store.BALL_CHUNK), [], "x")
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork")
+def test_a_forked_process_compresses_with_threads_of_its_own(tmp_path):
+    # the runner's workers are forked: they inherit the compressing pool, not its threads
+    _write_big(tmp_path / "parent.h5")
+    proc = multiprocessing.get_context("fork").Process(target=_write_big,
+                                                        args=(tmp_path / "child.h5",))
+    proc.start()
+    proc.join(30)
+    hung = proc.is_alive()
+    if hung:
+        proc.kill()
+    assert not hung and proc.exitcode == 0
+    with h5py.File(tmp_path / "child.h5", "r") as f:
+        np.testing.assert_array_equal(f["x"][:], np.arange(3.0 * store.BALL_CHUNK))
 
 
 def test_exception_in_writer_leaves_nothing(tmp_path):
