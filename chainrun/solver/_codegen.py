@@ -43,18 +43,8 @@ def _combo(coefs, rows: str, scale: str, index: str = "p") -> str:
 
 
 def _force_pass(x: str, s: int) -> list[str]:
-    """Accelerations at positions x into KV[s]: contact forces first (a loop without a
-    carried dependency, which the compiler vectorises), then their differences."""
-    return [
-        "    for c in range(ncl):",
-        "        o = coff[c]",
-        "        e = o + chi[c] - clo[c]",
-        f"        _forces({x}, F, o, e, mode, alpha)",
-        f"        KV[{s}, o] = -F[o]",
-        "        for p in range(o + 1, e):",
-        f"            KV[{s}, p] = F[p - 1] - F[p]",
-        f"        KV[{s}, e] = F[e - 1]",
-    ]
+    """Accelerations at positions x into KV[s], across the window (_accelerations)."""
+    return [f"    _accelerations({x}, F, MK, KV[{s}], m, mode, alpha)"]
 
 
 def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
@@ -85,10 +75,9 @@ def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
 
 _PROLOGUE = [
     "    m = S.ints[I_M]",
-    "    ncl = S.ints[I_NCL]",
     "    mode = S.ints[I_MODE]",
     "    alpha = S.fs[F_ALPHA]",
-    "    coff, clo, chi, F = S.coff, S.clo, S.chi, S.FS",
+    "    F, MK = S.FS, S.TR",
 ]
 
 

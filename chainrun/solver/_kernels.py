@@ -117,7 +117,7 @@ N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
 # TILE_ROWS rows: the compressions' series c_k (rows k <= PT), the forces' f_k (rows
 # PT + 1 + k), 1 / c_0 (row 2 PT), and the bounds of the compression over a series step
 # (rows LO_ROW, HI_ROW, _series_bounds); TR holds each contact lane's mask (1 inside a
-# cluster, _taylor)
+# cluster, _rebuild)
 SERIES_TILE = 16
 LO_ROW = 2 * PT + 1
 HI_ROW = 2 * PT + 2
@@ -200,20 +200,35 @@ def _forces(X, F, o, e, mode, alpha):
             F[p] = _force(X[p] - X[p + 1], mode, alpha)
 
 
+@njit(inline="always")
+def _accelerations(X, F, MK, out, m, mode, alpha):
+    """Accelerations of the m compact balls at positions X into out (forces into F).
+
+    One pass over the window's m - 1 contact lanes, clusters and all: the lane from a
+    cluster's last ball to the next cluster's first is masked (MK = 0, see _rebuild).
+    The loops are as long as the window, and vectorise, where loops per cluster are as
+    short as the clusters (a line broken by many impacting balls has hundreds of them).
+    """
+    nc = m - 1
+    if mode == 0:
+        for p in range(nc):
+            F[p] = _force(X[p] - X[p + 1], 0, alpha) * MK[p]
+    elif mode == 1:
+        for p in range(nc):
+            F[p] = _force(X[p] - X[p + 1], 1, alpha) * MK[p]
+    else:
+        for p in range(nc):
+            F[p] = _force(X[p] - X[p + 1], mode, alpha) * MK[p]
+    out[0] = -F[0]
+    for p in range(1, nc):
+        out[p] = F[p - 1] - F[p]
+    out[nc] = F[nc - 1]
+
+
 @njit
 def _rhs(S, Xs, out):
     """Accelerations of the compact balls at positions ``Xs`` into ``out``."""
-    mode = S.ints[I_MODE]
-    alpha = S.fs[F_ALPHA]
-    F = S.FS
-    for c in range(S.ints[I_NCL]):
-        o = S.coff[c]
-        e = o + S.chi[c] - S.clo[c]
-        _forces(Xs, F, o, e, mode, alpha)
-        out[o] = -F[o]
-        for p in range(o + 1, e):
-            out[p] = F[p - 1] - F[p]
-        out[e] = F[e - 1]
+    _accelerations(Xs, S.FS, S.TR, out, S.ints[I_M], S.ints[I_MODE], S.fs[F_ALPHA])
 
 
 # =========================================================================================
@@ -229,134 +244,49 @@ def _stages(S, h):
     KV[12] those at the step's end.
     """
     m = S.ints[I_M]
-    ncl = S.ints[I_NCL]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    coff, clo, chi, F = S.coff, S.clo, S.chi, S.FS
+    F, MK = S.FS, S.TR
     KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V
     for p in range(m):
         KV[0, p] = A0[p]
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * V0[p])
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[1, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[1, p] = F[p - 1] - F[p]
-        KV[1, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[1], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.0789002279381516 * V0[p] + h * (0.003112622984346139 * KV[0, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[2, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[2, p] = F[p - 1] - F[p]
-        KV[2, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[2], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.1183503419072274 * V0[p] + h * (0.0017508504286947032 * KV[0, p] + 0.00525255128608411 * KV[1, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[3, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[3, p] = F[p - 1] - F[p]
-        KV[3, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[3], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971966 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[4, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[4, p] = F[p - 1] - F[p]
-        KV[4, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[4], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.3333333333333333 * V0[p] + h * (0.03533793130488635 * KV[0, p] + -0.09581915952175495 * KV[2, p] + 0.11603678377242414 * KV[3, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[5, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[5, p] = F[p - 1] - F[p]
-        KV[5, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[5], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.25 * V0[p] + h * (0.018920483189113914 * KV[0, p] + -0.03815245266364541 * KV[2, p] + 0.05268745617004205 * KV[3, p] + -0.00220548669551055 * KV[4, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[6, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[6, p] = F[p - 1] - F[p]
-        KV[6, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[6], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[7, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[7, p] = F[p - 1] - F[p]
-        KV[7, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[7], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622022 * KV[0, p] + 0.4696608773351988 * KV[2, p] + -0.06814140470279324 * KV[3, p] + 0.010711857531715559 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[8, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[8, p] = F[p - 1] - F[p]
-        KV[8, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[8], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377505 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.0786573534951642 * KV[3, p] + 0.030838873981238836 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[9, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[9, p] = F[p - 1] - F[p]
-        KV[9, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[9], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.37218949950714336 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.46149874648558253 * KV[3, p] + -0.065185093485419 * KV[4, p] + 4.098038403866566 * KV[5, p] + 3.8922102844072386 * KV[6, p] + -7.025278165955346 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[10, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[10, p] = F[p - 1] - F[p]
-        KV[10, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[10], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382328 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931158 * KV[3, p] + 0.23253698859550634 * KV[4, p] + 11.903719357881844 * KV[5, p] + -1.9034949405460209 * KV[6, p] + -10.951226401858372 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[11, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[11, p] = F[p - 1] - F[p]
-        KV[11, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[11], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.9668752618349394 * KV[5, p] + 1.4186384244858752 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.060864379865006424 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(X, F, o, e, mode, alpha)
-        KV[12, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[12, p] = F[p - 1] - F[p]
-        KV[12, e] = F[e - 1]
+    _accelerations(X, F, MK, KV[12], m, mode, alpha)
 
 
 @njit
@@ -397,42 +327,20 @@ def _error_norm(S, h):
 def _dense_stages(S):
     """The three extra stages of the dense output (positions staged in XS)."""
     m = S.ints[I_M]
-    ncl = S.ints[I_NCL]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    coff, clo, chi, F = S.coff, S.clo, S.chi, S.FS
+    F, MK = S.FS, S.TR
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
         Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776217 * KV[0, p] + -0.4126700675361727 * KV[5, p] + -0.11888400830261207 * KV[6, p] + 0.5112504000718061 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.0031982003615129272 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(Xs, F, o, e, mode, alpha)
-        KV[13, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[13, p] = F[p - 1] - F[p]
-        KV[13, e] = F[e - 1]
+    _accelerations(Xs, F, MK, KV[13], m, mode, alpha)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(Xs, F, o, e, mode, alpha)
-        KV[14, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[14, p] = F[p - 1] - F[p]
-        KV[14, e] = F[e - 1]
+    _accelerations(Xs, F, MK, KV[14], m, mode, alpha)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.3588663399722558 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.02488248977172693 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
-    for c in range(ncl):
-        o = coff[c]
-        e = o + chi[c] - clo[c]
-        _forces(Xs, F, o, e, mode, alpha)
-        KV[15, o] = -F[o]
-        for p in range(o + 1, e):
-            KV[15, p] = F[p - 1] - F[p]
-        KV[15, e] = F[e - 1]
+    _accelerations(Xs, F, MK, KV[15], m, mode, alpha)
 
 
 @njit
@@ -836,11 +744,6 @@ def _taylor(S):
     for p in range(m):
         TX[0, p] = X0[p]
         TX[1, p] = V0[p]
-        MK[p] = 0.0
-    for c in range(S.ints[I_NCL]):
-        o = S.coff[c]
-        for p in range(o, o + S.chi[c] - S.clo[c]):
-            MK[p] = 1.0
     # the last tile's spare lanes carry no force
     f0 = PT + 1  # row of the forces' f_0
     for p in range(nc, (nc + SERIES_TILE - 1) // SERIES_TILE * SERIES_TILE):
@@ -1506,6 +1409,12 @@ def _rebuild(S):
     S.ints[I_M] = m
     if m > S.ints[I_MAXWIN]:
         S.ints[I_MAXWIN] = m
+    # contact lanes: 1 inside a cluster, 0 from a cluster's last ball to the next's first
+    for p in range(m):
+        S.TR[p] = 0.0
+    for c in range(ncl):
+        for p in range(S.coff[c], S.coff[c] + S.chi[c] - S.clo[c]):
+            S.TR[p] = 1.0
     for c in range(ncl):
         S.cen[c] = _cluster_energy(S, c)
     _rhs(S, S.X, S.A)
