@@ -195,6 +195,11 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
     write; zlib releases the GIL, so a pool of threads compresses them side by side and
     each is stored as it is (``write_direct_chunk``). The edge chunk is padded with
     zeros to the full chunk shape, as HDF5 stores it.
+
+    A chunk whose bytes are all zero, the dataset's fill value, is not stored at all:
+    HDF5 reads an unstored chunk as the fill value. Ahead of a wave the balls are at
+    rest where they started, so a snapshot of a long line is mostly such chunks. (Only
+    for chunks not stored before, which is how the writers here use it.)
     """
     global _deflate_pool
     if _deflate_pool is None:
@@ -203,9 +208,12 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
     chunk_shape = ds.chunks[len(lead):]
     step = chunk_shape[0]
     data = np.asarray(data, dtype=ds.dtype)
+    skip_blank = not np.asarray([ds.fillvalue], dtype=ds.dtype).view(np.uint8).any()
 
-    def pack(start: int) -> bytes:
-        part = data[start:start + step]
+    def pack(start: int) -> bytes | None:
+        part = np.ascontiguousarray(data[start:start + step])
+        if skip_blank and not part.view(np.uint8).any():
+            return None
         if part.shape != chunk_shape:
             full = np.zeros(chunk_shape, dtype=ds.dtype)
             full[:len(part)] = part
@@ -215,7 +223,8 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
     starts = range(0, data.shape[0], step)
     rest = (0,) * (len(chunk_shape) - 1)
     for start, blob in zip(starts, _deflate_pool.map(pack, starts)):
-        ds.id.write_direct_chunk(lead + (start,) + rest, blob)
+        if blob is not None:
+            ds.id.write_direct_chunk(lead + (start,) + rest, blob)
 
 
 def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],

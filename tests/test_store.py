@@ -330,10 +330,12 @@ def test_large_arrays_are_chunked_and_compressed(tmp_path):
     path = tmp_path / "big.h5"
     x = np.zeros(n)
     x[:3] = [2e-3, 1e-3, 0.0]
+    xs = [x, x.copy()]
+    xs[1][-1] = -0.0  # zero, but not the fill value's bytes: that chunk is stored
     v = np.random.default_rng(1).normal(size=(2, n))
     with store.RunWriter(path, spec, velocity_floor=1e-12) as w:
         for i, t in enumerate(spec.times):
-            w.snapshot(i, t, x, v[i])
+            w.snapshot(i, t, xs[i], v[i])
         w.finish(sol)
     with h5py.File(path, "r") as f:
         for name in ("position", "velocity"):
@@ -347,7 +349,11 @@ def test_large_arrays_are_chunked_and_compressed(tmp_path):
             assert ds.chunks is not None and ds.compression == "gzip", name
         assert f["events/time"].shape == (5000,)
         assert f["observables/potential_energy/value"][0] == pytest.approx(2 * 1e-3**2.5 / 2.5)
-        np.testing.assert_array_equal(f["particles/chain/position/value"][:, :, 0], [x, x])
+        position = f["particles/chain/position/value"]
+        np.testing.assert_array_equal(position[:, :, 0], xs)
+        assert np.signbit(position[1, -1, 0])
+        # the one chunk that is all zero bytes is left to the fill value
+        assert position.id.get_num_chunks() == 3
         np.testing.assert_array_equal(f["particles/chain/velocity/value"][:, :, 0], v)
         for name in ("final_velocity", "final_position", "separation_time"):
             np.testing.assert_array_equal(f[f"results/{name}"][:], getattr(sol, name))
