@@ -6,6 +6,7 @@ The solutions here are built by hand (no solver): small N, a few snapshots and e
 from __future__ import annotations
 
 import json
+import math
 import multiprocessing
 import os
 import re
@@ -319,6 +320,23 @@ def test_snapshot_hook_copies_the_arrays_it_is_given(tmp_path):
     r = store.read_run(tmp_path / "r.h5")
     np.testing.assert_array_equal(np.asarray(r.positions), np.repeat([[0.0], [1], [2]], 4, 1))
     np.testing.assert_array_equal(np.asarray(r.velocities)[:, 0], [0, 10, 20])
+
+
+def test_energies_of_long_lines_match_the_formulas():
+    # longer than physics' blocks, batched, and the last block a single contact
+    from chainrun.solver import physics
+
+    n = 2 * physics._BLOCK + 2
+    rng = np.random.default_rng(3)
+    x = -np.cumsum(rng.normal(0.0, 0.1, (2, n)), axis=1)
+    v = rng.normal(0.0, 0.5, (2, n))
+    for alpha in (1.0, 1.5, 2.2):
+        want = [math.fsum(max(a - b, 0.0) ** (alpha + 1) for a, b in zip(row[:-1], row[1:]))
+                / (alpha + 1) for row in x]
+        np.testing.assert_allclose(physics.potential_energy(x, alpha), want, rtol=1e-12)
+        assert physics.potential_energy(x[1], alpha) == pytest.approx(want[1], rel=1e-12)
+    want = [0.5 * math.fsum(u * u for u in row) for row in v]
+    np.testing.assert_allclose(physics.kinetic_energy(v), want, rtol=1e-12)
 
 
 def test_large_arrays_are_chunked_and_compressed(tmp_path):
