@@ -67,7 +67,7 @@ def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
         f"    hi = min(e, p + {reach})",
         "    for q in range(lo, hi + 1):",
         f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
-        "    _forces(Xs, F, lo, hi, mode, alpha)",
+        "    _forces(Xs, F, MK, lo, hi, mode, alpha)",
         "    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):",
         f"        KV[{s}, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)",
     ]
@@ -272,7 +272,7 @@ def generate() -> str:
         "    mode = S.ints[I_MODE]",
         "    alpha = S.fs[F_ALPHA]",
         "    h = S.fs[F_HLAST]",
-        "    KV, X0, V0, Xs, F = S.KV, S.X0, S.V0, S.XS, S.FS",
+        "    KV, X0, V0, Xs, F, MK = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR",
         "    c = _find_cluster(S, S.cb[p])",
         "    o = S.coff[c]",
         "    e = o + S.chi[c] - S.clo[c]",

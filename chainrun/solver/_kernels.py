@@ -184,41 +184,34 @@ def _force(c, mode, alpha):
 
 
 @njit(inline="always")
-def _forces(X, F, o, e, mode, alpha):
-    """Forces of the contacts o..e-1 of one cluster at positions X into F[o:e].
+def _forces(X, F, MK, o, e, mode, alpha):
+    """Forces of the contact lanes o..e-1 at positions X into F[o:e], masked by MK.
 
-    One loop per law, each with its law fixed, so that the loop vectorises.
+    One loop per law, each with its law fixed, so that the loop vectorises. A lane
+    from a cluster's last ball to the next cluster's first carries none (MK = 0, see
+    _rebuild).
     """
     if mode == 0:
         for p in range(o, e):
-            F[p] = _force(X[p] - X[p + 1], 0, alpha)
+            F[p] = _force(X[p] - X[p + 1], 0, alpha) * MK[p]
     elif mode == 1:
         for p in range(o, e):
-            F[p] = _force(X[p] - X[p + 1], 1, alpha)
+            F[p] = _force(X[p] - X[p + 1], 1, alpha) * MK[p]
     else:
         for p in range(o, e):
-            F[p] = _force(X[p] - X[p + 1], mode, alpha)
+            F[p] = _force(X[p] - X[p + 1], mode, alpha) * MK[p]
 
 
 @njit(inline="always")
 def _accelerations(X, F, MK, out, m, mode, alpha):
     """Accelerations of the m compact balls at positions X into out (forces into F).
 
-    One pass over the window's m - 1 contact lanes, clusters and all: the lane from a
-    cluster's last ball to the next cluster's first is masked (MK = 0, see _rebuild).
-    The loops are as long as the window, and vectorise, where loops per cluster are as
+    One pass over the window's m - 1 contact lanes, clusters and all, gaps masked: the
+    loops are as long as the window, and vectorise, where loops per cluster are as
     short as the clusters (a line broken by many impacting balls has hundreds of them).
     """
     nc = m - 1
-    if mode == 0:
-        for p in range(nc):
-            F[p] = _force(X[p] - X[p + 1], 0, alpha) * MK[p]
-    elif mode == 1:
-        for p in range(nc):
-            F[p] = _force(X[p] - X[p + 1], 1, alpha) * MK[p]
-    else:
-        for p in range(nc):
-            F[p] = _force(X[p] - X[p + 1], mode, alpha) * MK[p]
+    _forces(X, F, MK, 0, nc, mode, alpha)
     out[0] = -F[0]
     for p in range(1, nc):
         out[p] = F[p - 1] - F[p]
@@ -354,7 +347,7 @@ def _dense_ball(S, p):
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     h = S.fs[F_HLAST]
-    KV, X0, V0, Xs, F = S.KV, S.X0, S.V0, S.XS, S.FS
+    KV, X0, V0, Xs, F, MK = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR
     c = _find_cluster(S, S.cb[p])
     o = S.coff[c]
     e = o + S.chi[c] - S.clo[c]
@@ -362,21 +355,21 @@ def _dense_ball(S, p):
     hi = min(e, p + 3)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776217 * KV[0, q] + -0.4126700675361727 * KV[5, q] + -0.11888400830261207 * KV[6, q] + 0.5112504000718061 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.0031982003615129272 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
-    _forces(Xs, F, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
         KV[13, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
     lo = max(o, p - 2)
     hi = min(e, p + 2)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.2 * V0[q] + h * (0.009887781381457055 * KV[0, q] + -0.00760250313479944 * KV[5, q] + 0.047423345887574166 * KV[6, q] + -0.0363790659291871 * KV[7, q] + -0.021320408140087014 * KV[8, q] + 0.026772748548590852 * KV[9, q] + 0.0013364963323445063 * KV[10, q] + 0.001054215711719072 * KV[11, q] + -0.0011726106576121006 * KV[12, q]))
-    _forces(Xs, F, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
         KV[14, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
     lo = max(o, p - 1)
     hi = min(e, p + 1)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.3588663399722558 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.02488248977172693 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
-    _forces(Xs, F, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
         KV[15, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
 
