@@ -103,6 +103,8 @@ def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
     fs[K.F_FLOOR] = floor
     fs[K.F_EPSREL] = release_compression(alpha, floor)
     fs[K.F_ALPHA] = alpha
+    fs[K.F_LDORM] = K.FORCE_DORMANT ** (1.0 / alpha)
+    fs[K.F_LLOCATE] = K.FORCE_LOCATE ** (1.0 / alpha)
     ints[K.I_MODE] = 0 if alpha == 1.0 else (1 if alpha == 1.5 else 2)
     ints[K.I_MAXEV] = -1 if max_events is None else int(max_events)
     return K.State(

@@ -22,7 +22,7 @@ dense output of order 7).
 Contact states (``cst``)::
 
     DORMANT  touching at zero compression since t = 0, never pressed; engages when
-             compressed beyond ``LEVEL_DORMANT`` (not logged: it was closed already)
+             its force would reach ``FORCE_DORMANT`` (not logged: it was closed already)
     FRESH    active, not yet compressed beyond the floor's compression ``eps_rel``;
              openings fire only below minus the rounding level of its positions
     ACTIVE   active ("seasoned"); opens exactly where the compression crosses 0
@@ -104,12 +104,15 @@ EV_OPEN = -1
 EV_CLOSE = 1
 EV_ENGAGE = 2
 
-#: compression at which a dormant contact engages: its force c^alpha <= 1e-24 is far
-#: below rounding of order-1 velocities, and it keeps subnormals out of the front.
-LEVEL_DORMANT = 1e-24
-#: a dormant contact compressed less than this at the end of a step engages there
-#: without being located (the force it missed is below LEVEL_LOCATE^alpha * h)
-LEVEL_LOCATE = 1e-16
+#: a dormant contact engages where its force c^alpha would reach this (fs[F_LDORM] =
+#: FORCE_DORMANT^(1/alpha), 1e-24 for alpha = 1, 1e-16 for Hertz): far below rounding of
+#: order-1 velocities, it keeps subnormals out of the front, and the balls ahead of a
+#: wave, which it never moves, out of the window
+FORCE_DORMANT = 1e-24
+#: a dormant contact pressed at the end of a step less than FORCE_LOCATE^(1/alpha)
+#: (fs[F_LLOCATE], 1e-18 for alpha = 1, 1e-12 for Hertz) engages there without being
+#: located: the force it missed, over a fraction of the step, is below FORCE_LOCATE
+FORCE_LOCATE = 1e-18
 EPS = 2.220446049250313e-16
 N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
 N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
@@ -131,7 +134,7 @@ YIELD_STEPS = 20000
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
-    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_NFLOAT = range(17)
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_LDORM, F_LLOCATE, F_NFLOAT = range(19)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
@@ -1511,19 +1514,25 @@ def _contact_event(S, j, hcap):
         lev2 = 0.0
     elif st == DORMANT:
         # a dormant contact pressed slowly engages at the step's end (_post_step): its
-        # force below LEVEL_LOCATE^alpha is far under rounding; only a fast press is located
-        if c1 < LEVEL_LOCATE:
+        # force below FORCE_LOCATE is far under rounding; only a fast press is located
+        if c1 < S.fs[F_LLOCATE]:
             return 2.0, 0, 0.0
-        lev1 = LEVEL_DORMANT
+        lev1 = S.fs[F_LDORM]
         lev2 = -S.fs[F_EPSREL]
     else:
         lev1 = 0.0
         lev2 = S.lvl[j]
     if tay:
         # the series of c over the step lies within the hull of its Bernstein
-        # coefficients: a level outside it is not reached
+        # coefficients: a level outside it is not reached (a lane inside a cluster has
+        # them from the scan, _series_bounds)
         _contact_series(S, j)
-        blo, bhi = _bernstein_range(S.TD, h, S.TS[0])
+        pa = S.bmap[j]
+        if pa >= 0 and S.bmap[j + 1] == pa + 1 and S.TR[pa] != 0.0:
+            blo = S.TW[_tw(pa, LO_ROW)]
+            bhi = S.TW[_tw(pa, HI_ROW)]
+        else:
+            blo, bhi = _bernstein_range(S.TD, h, S.TS[0])
         if not (blo <= lev1 <= bhi or blo <= lev2 <= bhi):
             return 2.0, 0, 0.0
     else:
@@ -1662,7 +1671,7 @@ def _find_event(S):
                 cq0 = _contact_at(S, j, 0.0)[0]
                 cq1 = _contact_at(S, j, 1.0)[0]
                 if st == DORMANT:
-                    if cq1 < LEVEL_LOCATE:
+                    if cq1 < S.fs[F_LLOCATE]:
                         continue
                 elif st == OPEN:
                     if max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
@@ -1852,7 +1861,7 @@ def _due(S, j):
         if c < -r:
             return EV_RELEASE
     elif st == DORMANT:
-        if c >= LEVEL_DORMANT:
+        if c >= S.fs[F_LDORM]:
             return EV_ENGAGE
         if c <= -S.fs[F_EPSREL]:
             return EV_RELEASE
@@ -1875,7 +1884,7 @@ def _dormant_due(S):
             xl, vl, al = _ball_now(S, j)
             xr, vr, ar = _ball_now(S, j + 1)
             cj = xl - xr
-            if cj >= LEVEL_DORMANT or cj <= -S.fs[F_EPSREL]:
+            if cj >= S.fs[F_LDORM] or cj <= -S.fs[F_EPSREL]:
                 return True
     return False
 
