@@ -428,6 +428,35 @@ def test_bernstein_range_holds_the_polynomial():
     assert K._bernstein_range(decay, 1.0, scratch)[0] > 0.0
 
 
+def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
+    """The scan skips an open contact that _stays_open clears: on random series, one
+    so cleared never reaches its level, and never reaches 0 at the floor's rate."""
+    from chainrun.solver import _kernels as K
+
+    rng = np.random.default_rng(11)
+    order = np.arange(K.PT + 1)
+    floor, level = 1e-12, 2e-10
+    cleared = 0
+    for _ in range(3000):
+        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
+        T *= 10.0 ** rng.uniform(-16.0, -8.0, size=K.PT + 1)
+        h = rng.uniform(0.01, 1.5)
+        if not K._stays_open(T, h, level, floor):
+            continue
+        cleared += 1
+        s = np.linspace(0.0, h, 4001)
+        c = np.polynomial.polynomial.polyval(s, T)
+        w = np.polynomial.polynomial.polyval(s, np.polynomial.polynomial.polyder(T))
+        assert c.max() < level
+        assert not np.any((c >= 0.0) & (w >= floor))
+    assert cleared > 100
+    # the gap behind a Hertz wave (N = 20000 at t = 2000): touching within rounding,
+    # parting far slower than the floor, pulled back by the cluster's first ball
+    gap = np.zeros(K.PT + 1)
+    gap[:4] = -4.4e-16, -5.4e-17, 1e-15, -2e-16
+    assert K._stays_open(gap, 0.6, level, floor)
+
+
 @pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
     (60, 1, 1.5, 20.0), (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0), (40, 2, 2.3, 12.0),
 ])

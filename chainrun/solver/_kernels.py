@@ -949,25 +949,44 @@ def _bernstein_range(T, h, B):
 
 @njit
 def _curvature_bound(S, j):
-    """A bound on |c''| of contact j over the last step.
-
-    For a Taylor step, the sum of the absolute terms of the series of c'' (rigorous);
-    for a DOP853 step, the larger of |c''| at its two ends (the step is short).
-    """
+    """A bound on |c''| of contact j over the last (DOP853) step: the larger of |c''| at
+    its two ends (the step is short)."""
     pa = S.bmap[j]
     pb = S.bmap[j + 1]
-    if S.ints[I_TAY] == 1:
-        h = S.fs[F_HLAST]
-        g = 0.0
-        hk = 1.0
-        for k in range(2, PT + 1):
-            d = (S.TX[k, pa] if pa >= 0 else 0.0) - (S.TX[k, pb] if pb >= 0 else 0.0)
-            g += k * (k - 1) * abs(d) * hk
-            hk *= h
-        return g
     g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
     g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
     return max(abs(g0), abs(g1))
+
+
+@njit
+def _stays_open(T, h, level, floor):
+    """Whether an open contact whose compression is sum_k T[k] s^k can neither close nor
+    engage for s in [0, h].
+
+    It closes only where its compression c reaches 0 at a rate of at least the floor,
+    and engages only where c reaches its level (> 0). Upper bounds of c and of c' over
+    [0, h] are the sums of their series' positive terms: behind a Hertz wave, where the
+    ball just left and its cluster's first touch within rounding and part at rates far
+    below the floor, they settle what the Bernstein bounds of c alone leave open on
+    most steps.
+    """
+    cmax = T[0]
+    cabs = abs(T[0])
+    wmax = T[1]
+    wabs = abs(T[1])
+    hk1 = 1.0  # h^(k-1)
+    for k in range(1, PT + 1):
+        a = T[k] * hk1 * h
+        cmax += max(a, 0.0)
+        cabs += abs(a)
+        if k >= 2:
+            b = k * T[k] * hk1
+            wmax += max(b, 0.0)
+            wabs += abs(b)
+        hk1 *= h
+    cmax += 64.0 * EPS * cabs
+    wmax += 64.0 * EPS * wabs
+    return cmax < level and (cmax < 0.0 or wmax < floor)
 
 
 @njit
@@ -1683,7 +1702,11 @@ def _find_event(S):
                     if cq1 < S.fs[F_LLOCATE]:
                         continue
                 elif st == OPEN:
-                    if max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
+                    if tay:
+                        _contact_series(S, j)
+                        if _stays_open(S.TD, h, S.lvl[j], S.fs[F_FLOOR]):
+                            continue
+                    elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
                         continue  # stays open: below both of its levels (0 and lvl > 0)
             th, kind, lev = _contact_event(S, j, best)
             if th < best:
