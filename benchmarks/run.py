@@ -20,7 +20,7 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 
 Examples::
 
-    python -m benchmarks.run                 # default, about 13 minutes
+    python -m benchmarks.run                 # default, 8-13 minutes
     python -m benchmarks.run --full          # everything, the largest cases too
     python -m benchmarks.run --only peers scaling
 """
