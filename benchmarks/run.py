@@ -14,8 +14,11 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
    agreement check.
 3. scaling: Hertz N = 250 ... 10^6 and linear N = 100 ... 10^5, to the terminal
    state; the fitted exponent of time versus N for each tool.
-4. k80: N = 2000, K = 80, Hertz, to the terminal state.
-5. memory: peak resident memory of ``chainrun simulate``, N = 10^6, 200 snapshots
+4. targets: the timed targets as whole ``chainrun simulate`` processes, each run
+   three times: Hertz N = 10^6 and linear N = 10^5, K = 1, to the terminal state,
+   against their limits (10 s and 30 s).
+5. k80: N = 2000, K = 80, Hertz, to the terminal state.
+6. memory: peak resident memory of ``chainrun simulate``, N = 10^6, 200 snapshots
    (and 2, to show it does not depend on their number).
 
 Examples::
@@ -48,7 +51,7 @@ import numpy as np
 from benchmarks.peers import PeerResult, PeerUnavailable
 
 ROOT = Path(__file__).resolve().parents[1]
-SECTIONS = ("compile", "peers", "scaling", "k80", "memory")
+SECTIONS = ("compile", "peers", "scaling", "targets", "k80", "memory")
 
 #: The accuracy each tool claims for the final velocities (max abs error, paper
 #: units): chainrun's target in issue 6, the scipy and heyoka settings' measured
@@ -81,6 +84,9 @@ class Mode:
     k80_process: bool = False         # also time it as a whole process (as long again)
     memory_t_end: float | None = 1000.0
     memory_n: int = 1_000_000
+    # (label, N, alpha, limit in seconds): whole processes to the terminal state
+    targets: tuple = (("Hertz", 1_000_000, 1.5, 10.0), ("linear", 100_000, 1.0, 30.0))
+    target_runs: int = 3
 
     @classmethod
     def make(cls, full: bool, smoke: bool = False) -> "Mode":
@@ -89,7 +95,9 @@ class Mode:
                        hertz_n=(100, 200, 400),
                        linear_n=(50, 100, 200), hertz_budget=10.0, linear_budget=10.0,
                        linear_peer_n=(30, 60), peer_point_cap=10.0, k80_timeout=5.0,
-                       memory_t_end=20.0, memory_n=10_000)
+                       memory_t_end=20.0, memory_n=10_000,
+                       targets=(("Hertz", 2000, 1.5, 10.0), ("linear", 500, 1.0, 30.0)),
+                       target_runs=2)
         if not full:
             return cls(full=False)
         return cls(full=True, peers_n=(250, 1000, 4000, 10_000), scipy_max_n=10_000,
@@ -585,6 +593,32 @@ def section_scaling(mode: Mode, peers: dict | None, notes: list[str]) -> dict:
     return out
 
 
+def section_targets(mode: Mode, procs: Processes) -> list[dict]:
+    """The timed targets: whole ``chainrun simulate`` processes, K = 1, to the terminal
+    state, each run ``target_runs`` times (every time is kept: the machine's speed
+    moves, and a target met only by the fastest run is not met)."""
+    out = []
+    for label, n, alpha, limit in mode.targets:
+        log(f"targets: {label} N = {n}, K = 1, to the terminal state, as a process "
+            f"(limit {limit:g} s), {mode.target_runs} runs")
+        walls, cpus, errors = [], [], []
+        for _ in range(mode.target_runs):
+            r = procs.run(config_text(f"target-{label.lower()}-{n}", n, 1, alpha),
+                          timeout=10 * limit + 60, read_velocity=False)
+            if r.error:
+                errors.append(r.error)
+                log(f"  {r.error}")
+                break
+            walls.append(r.wall)
+            cpus.append(r.cpu)
+            log(f"  {fmt_t(r.wall)} s (cpu {fmt_t(r.cpu)} s, peak RSS {fmt_t(r.maxrss_mb)} MB)")
+        met = sum(w <= limit for w in walls)
+        out.append({"label": label, "n": n, "alpha": alpha, "limit": limit, "walls": walls,
+                    "cpus": cpus, "errors": errors, "runs_within_limit": met,
+                    "met": bool(walls) and not errors and met == len(walls)})
+    return out
+
+
 def section_k80(mode: Mode, procs: Processes) -> dict:
     log(f"k80: N = 2000, K = 80, Hertz, to the terminal state (limit {fmt_t(mode.k80_timeout)} s)")
     p = chainrun_point(2000, 80, 1.5, timeout=mode.k80_timeout)
@@ -723,6 +757,19 @@ def report(res: dict) -> str:
             for pt in s[kind]["chainrun"]:
                 if pt.get("skipped") or pt.get("error"):
                     out.append(f"  {kind} N = {pt['n']}: {pt.get('skipped') or pt.get('error')}")
+    tg = res.get("targets")
+    if tg:
+        out.append("")
+        out.append("Targets: whole chainrun simulate process (start-up, imports, numba cache "
+                   "load, solver, HDF5 file), K = 1, to the terminal state:")
+        for t in tg:
+            times = ", ".join(fmt_t(w) for w in t["walls"]) or "-"
+            verdict = (f"met in {t['runs_within_limit']} of {len(t['walls'])} runs"
+                       if t["walls"] else "no run finished")
+            if t["errors"]:
+                verdict += f"  [{t['errors'][0]}]"
+            out.append(f"  {t['label']} N = {t['n']}: {times} s (limit {t['limit']:g} s): "
+                       + ("MET, " if t["met"] else "NOT MET, ") + verdict)
     k = res.get("k80")
     if k:
         out.append("")
@@ -799,6 +846,8 @@ def main(argv=None) -> int:
             res["peers"] = section_peers(mode, procs, res["notes"])
         if "scaling" in args.only:
             res["scaling"] = section_scaling(mode, res.get("peers"), res["notes"])
+        if "targets" in args.only:
+            res["targets"] = section_targets(mode, procs)
         if "k80" in args.only:
             res["k80"] = section_k80(mode, procs)
         if "memory" in args.only:
