@@ -436,25 +436,37 @@ def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
     rng = np.random.default_rng(11)
     order = np.arange(K.PT + 1)
     floor, level = 1e-12, 2e-10
-    cleared = 0
-    for _ in range(3000):
-        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
-        T *= 10.0 ** rng.uniform(-16.0, -8.0, size=K.PT + 1)
-        h = rng.uniform(0.01, 1.5)
-        if not K._stays_open(T, h, level, floor):
-            continue
-        cleared += 1
+    D, B = np.zeros(K.PT + 1), np.zeros(K.N_SERIES_SAMPLES)
+
+    def stays_open(T, h):
+        if not K._stays_open(T, h, level, floor, D, B):
+            return False
         s = np.linspace(0.0, h, 4001)
         c = np.polynomial.polynomial.polyval(s, T)
         w = np.polynomial.polynomial.polyval(s, np.polynomial.polynomial.polyder(T))
         assert c.max() < level
         assert not np.any((c >= 0.0) & (w >= floor))
+        return True
+
+    cleared = 0
+    for _ in range(3000):
+        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
+        T *= 10.0 ** rng.uniform(-16.0, -8.0, size=K.PT + 1)
+        cleared += stays_open(T, rng.uniform(0.01, 1.5))
     assert cleared > 100
     # the gap behind a Hertz wave (N = 20000 at t = 2000): touching within rounding,
     # parting far slower than the floor, pulled back by the cluster's first ball
     gap = np.zeros(K.PT + 1)
     gap[:4] = -4.4e-16, -5.4e-17, 1e-15, -2e-16
-    assert K._stays_open(gap, 0.6, level, floor)
+    assert stays_open(gap, 0.6)
+    # the same gap a step after the release (N = 3000 at t = 1000): the terms of c' are
+    # up to 1e-11, of both signs, and cancel to below 1e-15; the sum of their positive
+    # parts is 5e-11, above the floor, and only the Bernstein bound of c' clears it
+    gap = np.array([0, -1.462e-14, 1.129e-13, -5.691e-13, 2.095e-12, -6.003e-12, 1.391e-11,
+                    -2.677e-11, 4.357e-11, -6.074e-11, 7.32e-11, -7.669e-11, 7.006e-11,
+                    -5.58e-11, 3.861e-11, -2.3e-11, 1.158e-11, -4.745e-12, 1.441e-12,
+                    -2.153e-13, -7.438e-14, 6.954e-14, -2.617e-14, 4.014e-15, 1.303e-15])
+    assert stays_open(gap, 0.6513)
 
 
 @pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [

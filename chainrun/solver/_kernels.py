@@ -959,16 +959,17 @@ def _curvature_bound(S, j):
 
 
 @njit
-def _stays_open(T, h, level, floor):
+def _stays_open(T, h, level, floor, D, B):
     """Whether an open contact whose compression is sum_k T[k] s^k can neither close nor
-    engage for s in [0, h].
+    engage for s in [0, h] (D, B: scratch).
 
     It closes only where its compression c reaches 0 at a rate of at least the floor,
     and engages only where c reaches its level (> 0). Upper bounds of c and of c' over
-    [0, h] are the sums of their series' positive terms: behind a Hertz wave, where the
-    ball just left and its cluster's first touch within rounding and part at rates far
-    below the floor, they settle what the Bernstein bounds of c alone leave open on
-    most steps.
+    [0, h] are the sums of their series' positive terms, and, where that of c' is not
+    below the floor, the Bernstein bound of c' (_bernstein_range): behind a Hertz wave
+    the ball just released and its cluster's first ball touch within rounding and part
+    at rates far below the floor, and c' is a sum of large terms of both signs that
+    cancel, which only the second bound sees.
     """
     cmax = T[0]
     cabs = abs(T[0])
@@ -986,7 +987,14 @@ def _stays_open(T, h, level, floor):
         hk1 *= h
     cmax += 64.0 * EPS * cabs
     wmax += 64.0 * EPS * wabs
-    return cmax < level and (cmax < 0.0 or wmax < floor)
+    if not cmax < level:
+        return False
+    if cmax < 0.0 or wmax < floor:
+        return True
+    for k in range(PT):
+        D[k] = (k + 1) * T[k + 1]
+    D[PT] = 0.0
+    return _bernstein_range(D, h, B)[1] < floor
 
 
 @njit
@@ -1704,7 +1712,7 @@ def _find_event(S):
                 elif st == OPEN:
                     if tay:
                         _contact_series(S, j)
-                        if _stays_open(S.TD, h, S.lvl[j], S.fs[F_FLOOR]):
+                        if _stays_open(S.TD, h, S.lvl[j], S.fs[F_FLOOR], S.TS[1], S.TS[0]):
                             continue
                     elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
                         continue  # stays open: below both of its levels (0 and lvl > 0)
