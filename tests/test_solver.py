@@ -460,8 +460,8 @@ def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
     gap[:4] = -4.4e-16, -5.4e-17, 1e-15, -2e-16
     assert stays_open(gap, 0.6)
     # the same gap a step after the release (N = 3000 at t = 1000): the terms of c' are
-    # up to 1e-11, of both signs, and cancel to below 1e-15; the sum of their positive
-    # parts is 5e-11, above the floor, and only the Bernstein bound of c' clears it
+    # up to 2e-11, of both signs, and cancel to below 1e-15; the sum of their positive
+    # parts is 5e-11, above the floor, and only the Bernstein bound of c' (2e-14) clears it
     gap = np.array([0, -1.462e-14, 1.129e-13, -5.691e-13, 2.095e-12, -6.003e-12, 1.391e-11,
                     -2.677e-11, 4.357e-11, -6.074e-11, 7.32e-11, -7.669e-11, 7.006e-11,
                     -5.58e-11, 3.861e-11, -2.3e-11, 1.158e-11, -4.745e-12, 1.441e-12,
