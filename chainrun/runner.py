@@ -180,10 +180,12 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     write to (the same path on every machine of a cluster).
     """
     from chainrun.limits import check_memory
-    from chainrun.solver import simulate, velocity_floor
+    from chainrun.solver import load_kernels, simulate, velocity_floor
     from chainrun.store import RunWriter
 
     check_memory(spec.n, len(spec.times))
+    # numba loads the kernels on their first call; the run's wall time is its solve's
+    load_kernels()
     path = run_file(Path(outdir), spec)
     hook = None if on_progress is None else (lambda t: on_progress(spec.run_id, t))
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:

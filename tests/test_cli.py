@@ -146,3 +146,23 @@ def test_start_up_imports_only_what_is_needed(tmp_path, statement, absent):
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, check=True)
     assert done.stdout.split() == []
+
+
+def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
+    # numba loads the kernels on their first call: a run must not pay for it in its time
+    import chainrun.solver as solver
+    from chainrun.config import parse_experiment
+
+    calls = []
+    monkeypatch.setattr(solver, "load_kernels", lambda: calls.append("load_kernels"))
+    real = solver.simulate
+
+    def simulate(*args, **kwargs):
+        calls.append("simulate")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(solver, "simulate", simulate)
+    (spec,) = parse_experiment('name = "x"\n[chain]\nn = 3\nk = 1\nalpha = 1.5\n',
+                               "toml").runs()
+    runner.simulate_run(spec, tmp_path)
+    assert calls == ["load_kernels", "simulate"]
