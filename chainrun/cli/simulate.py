@@ -66,15 +66,18 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
       chainrun simulate sweep.toml --force          # the config changed
       chainrun simulate sweep.toml --scheduler tcp://10.0.0.5:8786
     """
-    from chainrun.config import load_experiment
-    from chainrun.runner import simulate_experiment, velocity_table
+    from chainrun._gc import start_up
 
-    try:
-        experiment = load_experiment(config)
-    except ConfigError as exc:
-        for problem in exc.problems:
-            click.echo(f"{exc.source}: {problem}", err=True)
-        sys.exit(EXIT_BAD_INPUT)
+    with start_up("simulate"):  # pydantic and the config models
+        from chainrun.config import load_experiment
+        from chainrun.runner import simulate_experiment, velocity_table
+
+        try:
+            experiment = load_experiment(config)
+        except ConfigError as exc:
+            for problem in exc.problems:
+                click.echo(f"{exc.source}: {problem}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
     outdir = outdir if outdir is not None else Path("results") / experiment.name
     total = len(experiment.runs())
     click.echo(f"{experiment.name}: {total} run{'s' * (total != 1)} -> {outdir}/", err=True)

@@ -234,6 +234,9 @@ def load_kernels() -> None:
     global _kernels_loaded
     if _kernels_loaded:
         return
-    for alpha in (1.0, 1.5, 2.0):
-        simulate(2, 1, alpha, (0.0, 1.0))
+    from chainrun._gc import start_up
+
+    with start_up("kernels"):  # numba's registries and code: long-lived, no garbage
+        for alpha in (1.0, 1.5, 2.0):
+            simulate(2, 1, alpha, (0.0, 1.0))
     _kernels_loaded = True
