@@ -78,6 +78,10 @@ H5MD_VERSION = (1, 1)
 
 #: Chunk length along the ball axis of large arrays (2**16 float64 = 512 KiB).
 BALL_CHUNK = 2**16
+#: Snapshots of positions and velocities are kept in memory up to this many bytes and
+#: written together: one by one, a snapshot of a short line costs some twenty HDF5
+#: calls, most of a short run's time. A larger snapshot is written when it is taken.
+SNAPSHOT_BUFFER = 2**20
 #: Arrays with more elements than this are chunked and compressed.
 COMPRESS_ABOVE = 4096
 _GZIP_LEVEL = 1
@@ -202,9 +206,6 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
     for chunks not stored before, which is how the writers here use it.)
     """
     global _deflate_pool
-    if _deflate_pool is None:
-        _deflate_pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1,
-                                           thread_name_prefix="chainrun-deflate")
     chunk_shape = ds.chunks[len(lead):]
     step = chunk_shape[0]
     data = np.asarray(data, dtype=ds.dtype)
@@ -222,7 +223,14 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
 
     starts = range(0, data.shape[0], step)
     rest = (0,) * (len(chunk_shape) - 1)
-    for start, blob in zip(starts, _deflate_pool.map(pack, starts)):
+    if len(starts) == 1:  # one chunk: handing it to a thread costs more than it saves
+        blobs = map(pack, starts)
+    else:
+        if _deflate_pool is None:
+            _deflate_pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1,
+                                               thread_name_prefix="chainrun-deflate")
+        blobs = _deflate_pool.map(pack, starts)
+    for start, blob in zip(starts, blobs):
         if blob is not None:
             ds.id.write_direct_chunk(lead + (start,) + rest, blob)
 
@@ -428,24 +436,39 @@ class _Element:
         for axis, scale in enumerate(item_scales, start=1):
             self.value.dims[axis].attach_scale(scale)
         self.value.attrs["long_name"] = long_name
+        self.rows = 0  # rows in the file
+        self.pending: list[tuple[int, float, Any]] = []  # rows to write: (step, t, value)
 
-    def append(self, row: int, step: int, t: float, value) -> None:
+    def append(self, step: int, t: float, value) -> None:
+        """Keep a row to write with ``flush`` (``value`` must stay as it is until then)."""
+        self.pending.append((step, t, value))
+
+    def flush(self) -> None:
+        """Write the rows kept since the last flush."""
+        if not self.pending:
+            return
+        row, m = self.rows, len(self.pending)
+        steps, times, values = zip(*self.pending)
         for ds in (self.time, self.step, self.value):
-            ds.resize(row + 1, axis=0)
-        self.time[row] = t
-        self.step[row] = step
+            ds.resize(row + m, axis=0)
+        self.time[row:row + m] = times
+        self.step[row:row + m] = steps
         if self.value.compression is None:
-            self.value[row] = value
+            self.value[row:row + m] = values
         else:
-            _write_deflated(self.value, (row,), value)
+            for i, value in enumerate(values):
+                _write_deflated(self.value, (row + i,), value)
+        self.rows = row + m
+        self.pending.clear()
 
 
 class RunWriter:
     """Write one run file, snapshot by snapshot, then atomically put it in place.
 
     Use as a context manager. ``snapshot`` has the signature of the solver's
-    ``on_snapshot`` hook and writes each snapshot at once (nothing is kept in
-    memory); ``finish`` writes the results, events and diagnostics, closes the file
+    ``on_snapshot`` hook; snapshots are written in blocks of up to
+    ``SNAPSHOT_BUFFER`` bytes (a larger snapshot at once, without a copy);
+    ``finish`` writes the rest, the results, events and diagnostics, closes the file
     and renames it to ``path``. Leaving the ``with`` block by an exception, or
     without calling ``finish``, deletes the temporary file: nothing appears under
     ``path``. An existing file at ``path`` is replaced.
@@ -472,7 +495,7 @@ class RunWriter:
         self._spec = spec
         self._n = int(spec.n)
         self._alpha = float(spec.alpha)
-        self._rows = 0
+        self._pending_bytes = 0
         self._done = False
         self._h5: h5py.File | None = _create(self.path, self.temp_path, "run file")
         try:
@@ -557,22 +580,32 @@ class RunWriter:
             raise ValueError(
                 f"snapshot arrays must have shape ({self._n},); got {x.shape} and {v.shape}"
             )
-        row = self._rows
-        self._position.append(row, index, t, x[:, None])
-        self._velocity.append(row, index, t, v[:, None])
         values = {
             "kinetic_energy": physics.kinetic_energy(v),
             "potential_energy": physics.potential_energy(x, self._alpha),
             "momentum": physics.momentum(v),
         }
         for name, element in self._observables.items():
-            element.append(row, index, t, values[name])
-        self._rows = row + 1
+            element.append(index, t, values[name])
+        self._pending_bytes += x.nbytes + v.nbytes
+        if self._pending_bytes < SNAPSHOT_BUFFER:  # kept: the caller reuses its arrays
+            self._position.append(index, t, x[:, None].copy())
+            self._velocity.append(index, t, v[:, None].copy())
+        else:
+            self._position.append(index, t, x[:, None])
+            self._velocity.append(index, t, v[:, None])
+            self._flush()
+
+    def _flush(self) -> None:
+        for element in (self._position, self._velocity, *self._observables.values()):
+            element.flush()
+        self._pending_bytes = 0
 
     def finish(self, solution: Solution) -> None:
         """Write results, events and diagnostics; close; rename to ``path``."""
         h5 = self._live()
         try:
+            self._flush()
             self._write_solution(h5, solution)
             self._h5 = None
             _commit(h5, self.temp_path, self.path)
