@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -146,6 +147,28 @@ def test_start_up_imports_only_what_is_needed(tmp_path, statement, absent):
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, check=True)
     assert done.stdout.split() == []
+
+
+def test_simulate_imports_only_what_a_run_needs(tmp_path):
+    # A whole run in a fresh process: numba, h5py and pydantic, nothing of the analysis,
+    # the figures or Dask (numba itself brings scipy.linalg). Its solver time is the
+    # solve's: the kernels are loaded (or compiled) before its clock starts.
+    absent = ["matplotlib", "dask", "distributed", "xarray", "h5netcdf", "pandas",
+              "scipy.integrate", "scipy.optimize", "scipy.interpolate", "scipy.special",
+              "scipy.sparse", "chainrun.analysis", "chainrun.plotting", "chainrun.artefacts"]
+    (tmp_path / "cradle.toml").write_text(
+        'name = "cradle"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n'
+        "[output]\ntimes = {start = 0, stop = 10, step = 0.5}\n")
+    code = ("import sys\nfrom chainrun.cli import main\n"
+            "main(['simulate', 'cradle.toml'], standalone_mode=False)\n"
+            f"print('imported:', *[m for m in {absent!r} if m in sys.modules])")
+    env = {k: v for k, v in os.environ.items() if k != runner.SCHEDULER_ENV}
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, check=True, env=env)
+    assert done.stdout.splitlines()[-1] == "imported:"
+    assert "final velocities" in done.stdout
+    solver_time = re.search(r"\(([0-9.]+) s of solver time\)", done.stderr)
+    assert solver_time and float(solver_time.group(1)) < 0.1, done.stderr
 
 
 def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
