@@ -12,11 +12,13 @@ from __future__ import annotations
 import functools
 import math
 from decimal import Decimal
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from chainrun.solver import EventKind, Outcome, simulate
+from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
 try:
@@ -350,10 +352,10 @@ def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
     assert m > 0 and S.ints[K.I_JUMP] == 0
     S.ints[K.I_DSTAMP] += 1  # forget what the run built
     for p in range(m):
-        K._dense_at(S, p)
+        twin(K._dense_at)(S, p)
     by_ball = S.FX[:, :m].copy(), S.FV[:, :m].copy()
     S.ints[K.I_DENSE] = 0
-    K._dense(S)
+    twin(K._dense)(S)
     np.testing.assert_array_equal(S.FX[:, :m], by_ball[0])
     np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
 
@@ -391,11 +393,11 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
     S = _stopped_state(n, k, alpha, t_end)
     m = int(S.ints[K.I_M])
     assert m > 0 and S.ints[K.I_JUMP] == 0
-    K._save_start(S)
-    h = K._taylor(S)
+    twin(K._save_start)(S)
+    h = twin(K._taylor)(S)
     assert 0.0 < h < np.inf
     S.ints[K.I_TAY] = 1
-    assert K._step(S, h) <= 1.0
+    assert twin(K._step)(S, h) <= 1.0
     y0 = np.concatenate([S.X0[:m], S.V0[:m]])
     sol = solve_ivp(_window_rhs(S, alpha), (0.0, h), y0, method="DOP853",
                     rtol=1e-13, atol=1e-15)
@@ -406,7 +408,7 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
                      rtol=1e-13, atol=1e-15).y[:, -1]
     S.fs[K.F_HLAST] = h
     for p in range(m):
-        x, v = K._taylor_at(S, p, 0.5 * h)
+        x, v = twin(K._taylor_at)(S, p, 0.5 * h)
         assert abs(x - half[p]) < 1e-11 and abs(v - half[m + p]) < 1e-11
 
 
@@ -420,12 +422,12 @@ def test_bernstein_range_holds_the_polynomial():
     for _ in range(300):
         T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
         h = rng.uniform(0.01, 1.5)
-        lo, hi = K._bernstein_range(T, h, scratch)
+        lo, hi = twin(K._bernstein_range)(T, h, scratch)
         p = np.polynomial.polynomial.polyval(np.linspace(0.0, h, 4001), T)
         assert lo <= p.min() and p.max() <= hi
     # a compression decaying over 2.75 e-foldings in the step is seen to stay positive
     decay = np.array([(-2.75) ** j / math.factorial(j) for j in order])
-    assert K._bernstein_range(decay, 1.0, scratch)[0] > 0.0
+    assert twin(K._bernstein_range)(decay, 1.0, scratch)[0] > 0.0
 
 
 def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
@@ -439,7 +441,7 @@ def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
     D, B = np.zeros(K.PT + 1), np.zeros(K.N_SERIES_SAMPLES)
 
     def stays_open(T, h):
-        if not K._stays_open(T, h, level, floor, D, B):
+        if not twin(K._stays_open)(T, h, level, floor, D, B):
             return False
         s = np.linspace(0.0, h, 4001)
         c = np.polynomial.polynomial.polyval(s, T)
@@ -481,16 +483,16 @@ def test_window_bounds_hold_every_contacts_compression(n, k, alpha, t_end):
 
     S = _stopped_state(n, k, alpha, t_end)
     m = int(S.ints[K.I_M])
-    K._save_start(S)
-    h = K._taylor(S)
+    twin(K._save_start)(S)
+    h = twin(K._taylor)(S)
     assert h > 0.0
     for step in (h, 0.3 * h, 2.0 * h):  # the event scan's step, shorter or longer
-        K._series_bounds(S.TW, m - 1, step)
+        twin(K._series_bounds)(S.TW, m - 1, step)
         s = np.linspace(0.0, step, 2001)
         for p in range(m - 1):
             c = np.polynomial.polynomial.polyval(s, S.TX[:, p] - S.TX[:, p + 1])
-            lo = S.TW[K._tw(p, K.LO_ROW)]
-            hi = S.TW[K._tw(p, K.HI_ROW)]
+            lo = S.TW[twin(K._tw)(p, K.LO_ROW)]
+            hi = S.TW[twin(K._tw)(p, K.HI_ROW)]
             scale = 1e-14 * np.abs(c).max()
             assert lo <= c.min() + scale and c.max() - scale <= hi
             if c.min() < -scale:
@@ -542,7 +544,7 @@ def test_gap_closing_within_the_time_resolution(alpha):
     S.bx[:] = (-gap, 0.0)
     S.bv[:] = (w, 0.0)
     S.bt[:] = t0
-    K._schedule_pair(S, 0)
+    twin(K._schedule_pair)(S, 0)
     statuses = []
     while len(statuses) < 1000:
         statuses.append(K.advance(S))
@@ -560,3 +562,39 @@ def test_generated_stages_are_current():
     from chainrun.solver import _codegen
 
     assert _codegen.main(["--check"]) == 0
+
+
+def test_the_kernels_cache_is_keyed_by_every_solver_source(tmp_path):
+    """numba's cache notices a change in an entry point's file only; the folder the
+    kernels are cached in is named by every source of the solver package, so a change
+    in any of them (a kernel in another file, the generated code) compiles anew."""
+    import shutil
+
+    from chainrun.solver import _jit
+
+    solver = Path(_jit.__file__).parent
+    copy = tmp_path / "solver"
+    shutil.copytree(solver, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    names = sorted(p.name for p in copy.glob("*.py"))
+    assert {"_kernels.py", "_jit.py", "_driver.py"} <= set(names)
+    seen = {_jit.source_hash(copy)}
+    assert seen == {_jit.source_hash(solver)}
+    for name in names:
+        path = copy / name
+        text = path.read_text()
+        path.write_text(text + "\n# changed\n")
+        seen.add(_jit.source_hash(copy))
+        path.write_text(text)
+    assert len(seen) == len(names) + 1
+    assert _jit.source_hash(copy) == _jit.source_hash(solver)
+
+
+def test_the_entry_points_are_cached_under_the_keyed_folder():
+    from chainrun.solver import _jit
+    from chainrun.solver import _kernels as K
+
+    run(3, 1, 1.5)
+    folder = _jit.cache_dir()
+    assert folder.name == f"kernels-{_jit.source_hash()[:16]}"
+    for entry in (K.advance, K._snapshot):
+        assert _jit._cached(entry, folder), entry

@@ -215,28 +215,18 @@ def simulate(
     )
 
 
-_kernels_loaded = False
-
-
 def load_kernels() -> None:
-    """Load the numba kernels now, from numba's cache or by compiling them.
+    """Load the numba kernels now, from the cache or by compiling them.
 
-    numba loads a kernel (or compiles it, without a cache) on its first call, and the
-    run making that call would count it in its ``Diagnostics.wall_time``: 0.3-0.6 s
-    from a warm cache, a minute or more without one, for a run that may itself take
+    numba loads a kernel (or compiles it) on its first call, and the run making that
+    call would count it in its ``Diagnostics.wall_time``: tenths of a second from a
+    warm cache, tens of seconds without one, for a run that may itself take
     microseconds. Whoever reports a run's time calls this first
-    (``chainrun.runner.simulate_run`` does), so that the time is the solve's alone.
-
-    It solves a line of two balls for each kind of contact (linear, Hertz, other),
-    which imports numba and calls every kernel the driver calls. Only the first call
-    in a process does anything; it takes microseconds once the kernels are loaded.
+    (``chainrun.runner.simulate_run`` does), so that the time is the solve's alone; a
+    first run on a machine says on stderr that it is compiling (see ``_jit``).
     """
-    global _kernels_loaded
-    if _kernels_loaded:
-        return
     from chainrun._gc import start_up
+    from chainrun.solver import _driver
 
     with start_up("kernels"):  # numba's registries and code: long-lived, no garbage
-        for alpha in (1.0, 1.5, 2.0):
-            simulate(2, 1, alpha, (0.0, 1.0))
-    _kernels_loaded = True
+        _driver.load_kernels()

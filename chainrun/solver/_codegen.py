@@ -1,12 +1,13 @@
-"""Writes the DOP853 stage loops and the Taylor-series sums of ``_kernels.py`` as straight-line code.
+"""Writes the DOP853 stages and the Taylor-series sums of ``_kernels.py`` as straight-line code.
 
 The stage sums of an explicit Runge-Kutta step are fixed linear combinations of the
 previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerations
 alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls
 spends its time in loop overhead; written out with the coefficients as literals, each
-stage is one pass over the balls. The same holds for the sums over orders of the Taylor
-series (``_series_orders``, ``_series_bounds``): one pass over the window per order,
-with the sum over the lower orders written out. This script regenerates the section of
+stage is one pass over the balls. The Taylor series' sums (``_series_orders``) loop
+over orders with a tile's lanes written out, and its bounds (``_series_bounds``) are
+written out whole. The coefficients are computed exactly (``_exact_product``), so the
+text is the same on every machine. This script regenerates the section of
 ``_kernels.py`` between the markers below from scipy's DOP853 tableau and the series'
 orders::
 
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import math
 import sys
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +83,22 @@ _PROLOGUE = [
 ]
 
 
+def _exact_product(a, b) -> np.ndarray:
+    """``a @ b`` computed exactly in rationals, each entry rounded once to a double.
+
+    numpy's matrix product sums in an order (and with fused multiply-adds) that depend
+    on the CPU and the BLAS, so its last digits, and with them the generated text, would
+    differ between machines. Every double is a rational, and ``float(Fraction)`` rounds
+    correctly: the product here is the same on every machine.
+    """
+    a = np.atleast_2d(np.asarray(a, dtype=float))
+    b = np.asarray(b, dtype=float)
+    fa = [[Fraction(float(x)) for x in row] for row in a]
+    fb = [[Fraction(float(x)) for x in row] for row in b]
+    return np.array([[float(sum((r[k] * fb[k][j] for k in range(len(r))), Fraction(0)))
+                      for j in range(b.shape[1])] for r in fa])
+
+
 def _nystrom(rows):
     """Coefficients on the accelerations of ``rows @ KX``, whose entries sum to zero.
 
@@ -93,7 +111,7 @@ def _nystrom(rows):
     sums = rows.sum(axis=1)
     if np.any(np.abs(sums) > 64 * EPS * np.abs(rows).sum(axis=1)):
         raise ValueError(f"rows do not sum to zero: {sums}")
-    return rows @ dop.A[:width, :width]
+    return _exact_product(rows, dop.A[:width, :width])
 
 
 def _chains(terms: list[str]) -> str:
@@ -103,41 +121,53 @@ def _chains(terms: list[str]) -> str:
     return "(" + " + ".join(terms[0::2]) + ") + (" + " + ".join(terms[1::2]) + ")"
 
 
-def _series(pt: int) -> list[str]:
+def _series(pt: int, tile: int) -> list[str]:
     """Orders 1..pt-2 of the force series and 3..pt of the positions' (see _taylor).
 
     f_k = (alpha c_k f_0 + sum_{j=1..k-1} ((alpha+1) j / k - 1) c_j f_{k-j}) / c_0, the
     recurrence of _taylor with 1/k folded into its weights, on the work tiles TW
-    (rows c_k at k, f_k at pt + 1 + k, 1/c_0 at 2 pt; see _tw). Within a tile every row is
-    at a fixed offset, so the pass over a tile reads and writes one array at known
-    distances: the compiler vectorises it with no run-time overlap checks, which on a
-    dozen lanes cost more than the sums.
+    (rows c_k at k, f_k at pt + 1 + k, 1/c_0 at 2 pt; see _tw). The sum over j is a loop;
+    within it the tile's ``tile`` lanes are written out, each with two accumulators (even
+    and odd j), so that they stay in registers and the compiler packs the lanes into
+    vector instructions: a loop over the lanes would load and store its partial sums at
+    every j, and sums written out for every order would be a function of thousands of
+    lines, slow to compile.
     """
+    lanes = range(tile)
     lines = [
-        "@njit(fastmath={\"contract\"})",
+        "@kernel(fastmath={\"contract\"})",
         "def _series_orders(TX, W, nc, m, alpha):",
         '    """Orders 1 and up of the force series of every contact lane (see _taylor)."""',
         "    a1 = alpha + 1.0",
         "    nt = (nc + SERIES_TILE - 1) // SERIES_TILE",
-    ]
-    for k in range(1, pt - 1):
-        f = pt + 1  # row of f_0
-        terms = [f"alpha * W[o + {k} * SERIES_TILE] * W[o + {f} * SERIES_TILE]"] + [
-            f"(a1 * {j / k!r} - 1.0) * W[o + {j} * SERIES_TILE] * W[o + {f + k - j} * SERIES_TILE]"
-            for j in range(1, k)]
-        lines += [
-            "    for p in range(nc):",
-            f"        W[_tw(p, {k})] = TX[{k}, p] - TX[{k}, p + 1]",
-            "    for t in range(nt):",
-            "        for lane in range(SERIES_TILE):",
-            "            o = t * TILE_STRIDE + lane",
-            f"            W[o + {f + k} * SERIES_TILE] = ({_chains(terms)}) * W[o + {2 * pt} * SERIES_TILE]",
-            "    for p in range(m):",
-            f"        fl = W[_tw(p - 1, {f + k})] if p > 0 else 0.0",
-            f"        fr = W[_tw(p, {f + k})] if p < nc else 0.0",
-            f"        TX[{k + 2}, p] = (fl - fr) * {1.0 / ((k + 1) * (k + 2))!r}",
-        ]
-    lines += [
+        f"    f0 = {pt + 1}  # row of f_0",
+        f"    for k in range(1, {pt - 1}):",
+        "        for p in range(nc):",
+        "            W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]",
+        "        for t in range(nt):",
+        "            o = t * TILE_STRIDE",
+        "            c = o + k * SERIES_TILE",
+        "            f = o + f0 * SERIES_TILE",
+        *[f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes],
+        *[f"            d{i} = 0.0" for i in lanes],
+        "            for j in range(1, k, 2):",
+        "                w = a1 * J_OVER_K[k, j] - 1.0",
+        "                c = o + j * SERIES_TILE",
+        "                f = o + (f0 + k - j) * SERIES_TILE",
+        *[f"                d{i} += w * W[c + {i}] * W[f + {i}]" for i in lanes],
+        "            for j in range(2, k, 2):",
+        "                w = a1 * J_OVER_K[k, j] - 1.0",
+        "                c = o + j * SERIES_TILE",
+        "                f = o + (f0 + k - j) * SERIES_TILE",
+        *[f"                e{i} += w * W[c + {i}] * W[f + {i}]" for i in lanes],
+        "            c = o + (f0 + k) * SERIES_TILE",
+        f"            f = o + {2 * pt} * SERIES_TILE",
+        *[f"            W[c + {i}] = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
+        "        s = SERIES_SCALE[k]",
+        "        for p in range(m):",
+        "            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
+        "            fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
+        "            TX[k + 2, p] = (fl - fr) * s",
         "    # the compressions' last two orders, for the bounds (_series_bounds)",
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",
@@ -149,7 +179,7 @@ def _series(pt: int) -> list[str]:
 def _bounds(pt: int, db: int) -> list[str]:
     """Bernstein bounds of every contact lane's compression over a series step."""
     lines = [
-        "@njit(fastmath={\"contract\"})",
+        "@kernel(fastmath={\"contract\"})",
         "def _series_bounds(W, nc, h):",
         '    """Bounds of every contact lane\'s compression over a series step [0, h].',
         "",
@@ -185,14 +215,14 @@ def _bounds(pt: int, db: int) -> list[str]:
 
 
 def generate() -> str:
-    from chainrun.solver._kernels import DB, PT
+    from chainrun.solver._kernels import DB, PT, SERIES_TILE
 
     A, B, C = dop.A, dop.B, dop.C
     ns, nse = dop.N_STAGES, dop.N_STAGES_EXTENDED
-    AA = A @ A  # stage positions: X0 + h C V0 + h^2 (A @ A) @ KV
+    AA = _exact_product(A, A)  # stage positions: X0 + h C V0 + h^2 (A @ A) @ KV
     lines = [
         BEGIN,
-        "@njit",
+        "@kernel",
         "def _stages(S, h):",
         '    """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.',
         "",
@@ -217,7 +247,7 @@ def generate() -> str:
     lines += [
         "",
         "",
-        "@njit",
+        "@kernel",
         "def _error_norm(S, h):",
         '    """DOP853\'s error estimate of the last step, max over balls, scaled by the tolerance.',
         "",
@@ -249,7 +279,7 @@ def generate() -> str:
         "    return abs(h) * np.sqrt(num / den)",
         "",
         "",
-        "@njit",
+        "@kernel",
         "def _dense_stages(S):",
         '    """The three extra stages of the dense output (positions staged in XS)."""',
         *_PROLOGUE,
@@ -261,7 +291,7 @@ def generate() -> str:
     lines += [
         "",
         "",
-        "@njit",
+        "@kernel",
         "def _dense_ball(S, p):",
         '    """The three extra stages of the dense output at compact ball p alone.',
         "",
@@ -283,7 +313,7 @@ def generate() -> str:
     lines += [
         "",
         "",
-        "@njit(inline=\"always\")",
+        "@kernel(inline=\"always\")",
         "def _dense_rows(S, p):",
         '    """Rows 3..6 of ball p\'s interpolant: h * D @ K for positions and velocities."""',
         "    h = S.fs[F_HLAST]",
@@ -292,7 +322,7 @@ def generate() -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
-    lines += ["", ""] + _series(PT) + ["", ""] + _bounds(PT, DB)
+    lines += ["", ""] + _series(PT, SERIES_TILE) + ["", ""] + _bounds(PT, DB)
     lines.append(END)
     return "\n".join(lines) + "\n"
 

@@ -48,18 +48,12 @@ recurrences, step size from the last terms).
 
 from __future__ import annotations
 
-import functools
 import math
 from collections import namedtuple
 
-import numba as nb
 import numpy as np
 
-# Compiled without numba's reference counting (NRT): the kernels allocate nothing, and
-# every call that passes the state, some fifty arrays, would otherwise increment and
-# decrement the count of each (two out-of-line calls per array), which was most of
-# the cost of the many small calls of the event search.
-njit = functools.partial(nb.njit, cache=True, _nrt=False)
+from chainrun.solver._jit import entry, kernel
 
 # ---- DOP853 (its tableau is written into the stage code by _codegen) -----------------
 _NS = 12  # stages of the step proper; row 12 holds f at the step's end (FSAL)
@@ -81,6 +75,10 @@ SERIES_CLUSTERS = 8
 # are large: at degree 10 the scan flagged 1.7 lanes per step that never reach 0, each
 # then sampled in vain (_contact_event); at degree 16, 0.5
 DB = 16
+# the weights j / k of the force series' recurrence, and 1 / ((k + 1)(k + 2)), the step
+# from the forces' order k to the positions' order k + 2 (see _series_orders)
+J_OVER_K = np.array([[j / k if k else 0.0 for j in range(PT)] for k in range(PT)])
+SERIES_SCALE = np.array([1.0 / ((k + 1) * (k + 2)) for k in range(PT)])
 _BERN = np.array([[math.comb(i, k) / math.comb(DB, k) if k <= i else 0.0
                    for i in range(DB + 1)] for k in range(DB + 1)])
 
@@ -177,7 +175,7 @@ State = namedtuple(
 # =========================================================================================
 # forces
 # =========================================================================================
-@njit(inline="always")
+@kernel(inline="always")
 def _force(c, mode, alpha):
     if mode == 0:
         return c
@@ -189,7 +187,7 @@ def _force(c, mode, alpha):
         return c * abs(c) ** (alpha - 1.0)
 
 
-@njit(inline="always")
+@kernel
 def _forces(X, F, MK, o, e, mode, alpha):
     """Forces of the contact lanes o..e-1 at positions X into F[o:e], masked by MK.
 
@@ -208,7 +206,7 @@ def _forces(X, F, MK, o, e, mode, alpha):
             F[p] = _force(X[p] - X[p + 1], mode, alpha) * MK[p]
 
 
-@njit(inline="always")
+@kernel
 def _accelerations(X, F, MK, out, m, mode, alpha):
     """Accelerations of the m compact balls at positions X into out (forces into F).
 
@@ -224,7 +222,7 @@ def _accelerations(X, F, MK, out, m, mode, alpha):
     out[nc] = F[nc - 1]
 
 
-@njit
+@kernel
 def _rhs(S, Xs, out):
     """Accelerations of the compact balls at positions ``Xs`` into ``out``."""
     _accelerations(Xs, S.FS, S.TR, out, S.ints[I_M], S.ints[I_MODE], S.fs[F_ALPHA])
@@ -234,7 +232,7 @@ def _rhs(S, Xs, out):
 # one DOP853 step for x'' = a(x), y = (x, v), f = (v, a)
 # =========================================================================================
 # ---- BEGIN GENERATED STAGES (python -m chainrun.solver._codegen) ----
-@njit
+@kernel
 def _stages(S, h):
     """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.
 
@@ -259,7 +257,7 @@ def _stages(S, h):
         X[p] = X0[p] + h * (0.1183503419072274 * V0[p] + h * (0.0017508504286947032 * KV[0, p] + 0.00525255128608411 * KV[1, p]))
     _accelerations(X, F, MK, KV[3], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971966 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
+        X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971964 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
     _accelerations(X, F, MK, KV[4], m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.3333333333333333 * V0[p] + h * (0.03533793130488635 * KV[0, p] + -0.09581915952175495 * KV[2, p] + 0.11603678377242414 * KV[3, p]))
@@ -271,24 +269,24 @@ def _stages(S, h):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
     _accelerations(X, F, MK, KV[7], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622022 * KV[0, p] + 0.4696608773351988 * KV[2, p] + -0.06814140470279324 * KV[3, p] + 0.010711857531715559 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
+        X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622033 * KV[0, p] + 0.46966087733519885 * KV[2, p] + -0.06814140470279369 * KV[3, p] + 0.01071185753171531 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
     _accelerations(X, F, MK, KV[8], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377505 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.0786573534951642 * KV[3, p] + 0.030838873981238836 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
+        X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377502 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.07865735349516391 * KV[3, p] + 0.030838873981239242 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
     _accelerations(X, F, MK, KV[9], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.37218949950714336 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.46149874648558253 * KV[3, p] + -0.065185093485419 * KV[4, p] + 4.098038403866566 * KV[5, p] + 3.8922102844072386 * KV[6, p] + -7.025278165955346 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
+        X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.3721894995071433 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.4614987464855827 * KV[3, p] + -0.06518509348541897 * KV[4, p] + 4.098038403866562 * KV[5, p] + 3.8922102844072377 * KV[6, p] + -7.025278165955339 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
     _accelerations(X, F, MK, KV[10], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382328 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931158 * KV[3, p] + 0.23253698859550634 * KV[4, p] + 11.903719357881844 * KV[5, p] + -1.9034949405460209 * KV[6, p] + -10.951226401858372 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
+        X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382327 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931152 * KV[3, p] + 0.23253698859550578 * KV[4, p] + 11.903719357881853 * KV[5, p] + -1.9034949405460306 * KV[6, p] + -10.951226401858388 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
     _accelerations(X, F, MK, KV[11], m, mode, alpha)
     for p in range(m):
-        X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.9668752618349394 * KV[5, p] + 1.4186384244858752 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.060864379865006424 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
+        X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.96687526183494 * KV[5, p] + 1.4186384244858756 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.06086437986500647 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
     _accelerations(X, F, MK, KV[12], m, mode, alpha)
 
 
-@njit
+@kernel
 def _error_norm(S, h):
     """DOP853's error estimate of the last step, max over balls, scaled by the tolerance.
 
@@ -303,8 +301,8 @@ def _error_norm(S, h):
     num = 0.0
     den = 1.0
     for p in range(m):
-        e5 = h * (-0.1886518800179879 * KV[0, p] + 0.9962151331241323 * KV[3, p] + 0.23599761577747436 * KV[4, p] + -2.854630682350912 * KV[5, p] + -4.082808827933706 * KV[6, p] + 6.038341535948958 * KV[7, p] + 0.39584534789657555 * KV[8, p] + -0.5259249995299615 * KV[9, p] + -0.014383242914573597 * KV[10, p])
-        e3 = h * (-0.45385457342917346 * KV[0, p] + 2.698758502261861 * KV[3, p] + 0.6812767760191378 * KV[4, p] + -16.885342816594815 * KV[5, p] + -13.987876814514605 * KV[6, p] + 27.96175549233409 * KV[7, p] + 0.3042333850581198 * KV[8, p] + -0.3335239499192925 * KV[9, p] + 0.014573998784681819 * KV[10, p])
+        e5 = h * (-0.18865188001798794 * KV[0, p] + 0.9962151331241323 * KV[3, p] + 0.23599761577747433 * KV[4, p] + -2.8546306823509116 * KV[5, p] + -4.082808827933706 * KV[6, p] + 6.038341535948958 * KV[7, p] + 0.39584534789657555 * KV[8, p] + -0.5259249995299615 * KV[9, p] + -0.014383242914573597 * KV[10, p])
+        e3 = h * (-0.45385457342917346 * KV[0, p] + 2.6987585022618616 * KV[3, p] + 0.6812767760191378 * KV[4, p] + -16.885342816594818 * KV[5, p] + -13.987876814514605 * KV[6, p] + 27.96175549233409 * KV[7, p] + 0.3042333850581198 * KV[8, p] + -0.3335239499192926 * KV[9, p] + 0.014573998784681819 * KV[10, p])
         sc = tol + 64.0 * EPS * max(abs(X0[p]), abs(X[p]))
         n = e5 * e5 * e5 * e5
         d = (e5 * e5 + 0.01 * e3 * e3) * sc * sc
@@ -322,7 +320,7 @@ def _error_norm(S, h):
     return abs(h) * np.sqrt(num / den)
 
 
-@njit
+@kernel
 def _dense_stages(S):
     """The three extra stages of the dense output (positions staged in XS)."""
     m = S.ints[I_M]
@@ -332,17 +330,17 @@ def _dense_stages(S):
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
-        Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776217 * KV[0, p] + -0.4126700675361727 * KV[5, p] + -0.11888400830261207 * KV[6, p] + 0.5112504000718061 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.0031982003615129272 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
+        Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776213 * KV[0, p] + -0.41267006753617264 * KV[5, p] + -0.11888400830261192 * KV[6, p] + 0.5112504000718059 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.003198200361512927 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
     _accelerations(Xs, F, MK, KV[13], m, mode, alpha)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
     _accelerations(Xs, F, MK, KV[14], m, mode, alpha)
     for p in range(m):
-        Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.3588663399722558 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.02488248977172693 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
+        Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.35886633997225575 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.024882489771726926 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
     _accelerations(Xs, F, MK, KV[15], m, mode, alpha)
 
 
-@njit
+@kernel
 def _dense_ball(S, p):
     """The three extra stages of the dense output at compact ball p alone.
 
@@ -360,7 +358,7 @@ def _dense_ball(S, p):
     lo = max(o, p - 3)
     hi = min(e, p + 3)
     for q in range(lo, hi + 1):
-        Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776217 * KV[0, q] + -0.4126700675361727 * KV[5, q] + -0.11888400830261207 * KV[6, q] + 0.5112504000718061 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.0031982003615129272 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
+        Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776213 * KV[0, q] + -0.41267006753617264 * KV[5, q] + -0.11888400830261192 * KV[6, q] + 0.5112504000718059 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.003198200361512927 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
     _forces(Xs, F, MK, lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
         KV[13, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
@@ -374,259 +372,142 @@ def _dense_ball(S, p):
     lo = max(o, p - 1)
     hi = min(e, p + 1)
     for q in range(lo, hi + 1):
-        Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.3588663399722558 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.02488248977172693 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
+        Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.35886633997225575 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.024882489771726926 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
     _forces(Xs, F, MK, lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
         KV[15, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _dense_rows(S, p):
     """Rows 3..6 of ball p's interpolant: h * D @ K for positions and velocities."""
     h = S.fs[F_HLAST]
     KV, FX, FV = S.KV, S.FX, S.FV
-    FX[3, p] = h * h * (2.861169879683012 * KV[0, p] + 30.512155838528837 * KV[5, p] + -24.612645088655494 * KV[6, p] + -35.41960917471137 * KV[7, p] + -3.8634586281383996 * KV[8, p] + 3.7761446592257824 * KV[9, p] + 0.5382666867527854 * KV[10, p] + 0.12984961919289312 * KV[11, p] + -0.14125972611089996 * KV[12, p] + -14.374598829726839 * KV[13, p] + 40.593984763959675 * KV[14, p])
+    FX[3, p] = h * h * (2.861169879683012 * KV[0, p] + 30.512155838528837 * KV[5, p] + -24.61264508865549 * KV[6, p] + -35.419609174711354 * KV[7, p] + -3.8634586281384 * KV[8, p] + 3.7761446592257824 * KV[9, p] + 0.5382666867527854 * KV[10, p] + 0.12984961919289312 * KV[11, p] + -0.14125972611089993 * KV[12, p] + -14.374598829726839 * KV[13, p] + 40.593984763959675 * KV[14, p])
     FV[3, p] = h * (-8.428938276109013 * KV[0, p] + 0.5667149535193777 * KV[5, p] + -3.0689499459498917 * KV[6, p] + 2.38466765651207 * KV[7, p] + 2.117034582445028 * KV[8, p] + -0.871391583777973 * KV[9, p] + 2.2404374302607883 * KV[10, p] + 0.6315787787694688 * KV[11, p] + -0.08899033645133331 * KV[12, p] + 18.148505520854727 * KV[13, p] + -9.194632392478356 * KV[14, p] + -4.436036387594894 * KV[15, p])
-    FX[4, p] = h * h * (-17.921210306702967 * KV[0, p] + -124.22607870722852 * KV[5, p] + 273.13795938281214 * KV[6, p] + 96.31318087284055 * KV[7, p] + 27.684870153300388 * KV[8, p] + -29.055636475084693 * KV[9, p] + -3.0977069495595093 * KV[10, p] + 0.46259520639923596 * KV[11, p] + 0.2114704846299032 * KV[12, p] + 104.24898538523482 * KV[13, p] + -327.75842904664137 * KV[14, p])
+    FX[4, p] = h * h * (-17.921210306702967 * KV[0, p] + -124.22607870722848 * KV[5, p] + 273.1379593828121 * KV[6, p] + 96.31318087284055 * KV[7, p] + 27.68487015330039 * KV[8, p] + -29.055636475084697 * KV[9, p] + -3.0977069495595084 * KV[10, p] + 0.4625952063992359 * KV[11, p] + 0.21147048462990323 * KV[12, p] + 104.24898538523482 * KV[13, p] + -327.75842904664137 * KV[14, p])
     FV[4, p] = h * (10.427508642579134 * KV[0, p] + 242.28349177525817 * KV[5, p] + 165.20045171727028 * KV[6, p] + -374.5467547226902 * KV[7, p] + -22.113666853125306 * KV[8, p] + 7.733432668472264 * KV[9, p] + -30.674084731089398 * KV[10, p] + -9.332130526430229 * KV[11, p] + 15.697238121770845 * KV[12, p] + -31.139403219565178 * KV[13, p] + -9.35292435884448 * KV[14, p] + 35.81684148639408 * KV[15, p])
-    FX[5, p] = h * h * (-8.999411590110817 * KV[0, p] + -250.14465065648486 * KV[5, p] + -7.345168174338192 * KV[6, p] + 324.41205855963244 * KV[7, p] + 1.3538496519789454 * KV[8, p] + 3.856666241020232 * KV[9, p] + -0.5618712467427652 * KV[10, p] + -0.5475191693050367 * KV[11, p] + 0.45402652434053137 * KV[12, p] + 47.262978033508965 * KV[13, p] + -109.74095817349945 * KV[14, p])
+    FX[5, p] = h * h * (-8.999411590110816 * KV[0, p] + -250.14465065648486 * KV[5, p] + -7.345168174338197 * KV[6, p] + 324.41205855963244 * KV[7, p] + 1.3538496519789456 * KV[8, p] + 3.8566662410202324 * KV[9, p] + -0.5618712467427652 * KV[10, p] + -0.5475191693050367 * KV[11, p] + 0.45402652434053137 * KV[12, p] + 47.262978033508965 * KV[13, p] + -109.74095817349945 * KV[14, p])
     FV[5, p] = h * (19.985053242002433 * KV[0, p] + -387.0373087493518 * KV[5, p] + -189.17813819516758 * KV[6, p] + 527.8081592054236 * KV[7, p] + -11.57390253995963 * KV[8, p] + 6.8812326946963 * KV[9, p] + -1.0006050966910838 * KV[10, p] + 0.7777137798053443 * KV[11, p] + -2.778205752353508 * KV[12, p] + -60.19669523126412 * KV[13, p] + 84.32040550667716 * KV[14, p] + 11.99229113618279 * KV[15, p])
-    FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 904.8218815202387 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631898 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188784 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
+    FX[6, p] = h * h * (75.66260800528795 * KV[0, p] + 904.8218815202384 * KV[5, p] + -991.2456491432963 * KV[6, p] + -911.6644928639355 * KV[7, p] + -83.3439947560784 * KV[8, p] + 73.06569397631901 * KV[9, p] + 11.227103851084005 * KV[10, p] + -1.2324213700720026 * KV[11, p] + -0.5764911999188783 * KV[12, p] + -446.85829878732994 * KV[13, p] + 1370.1440607677018 * KV[14, p])
     FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
 
 
-@njit(fastmath={"contract"})
+@kernel(fastmath={"contract"})
 def _series_orders(TX, W, nc, m, alpha):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
-    for p in range(nc):
-        W[_tw(p, 1)] = TX[1, p] - TX[1, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 26 * SERIES_TILE] = (alpha * W[o + 1 * SERIES_TILE] * W[o + 25 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 26)] if p > 0 else 0.0
-        fr = W[_tw(p, 26)] if p < nc else 0.0
-        TX[3, p] = (fl - fr) * 0.16666666666666666
-    for p in range(nc):
-        W[_tw(p, 2)] = TX[2, p] - TX[2, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 27 * SERIES_TILE] = (alpha * W[o + 2 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 27)] if p > 0 else 0.0
-        fr = W[_tw(p, 27)] if p < nc else 0.0
-        TX[4, p] = (fl - fr) * 0.08333333333333333
-    for p in range(nc):
-        W[_tw(p, 3)] = TX[3, p] - TX[3, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 28 * SERIES_TILE] = (alpha * W[o + 3 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 27 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 28)] if p > 0 else 0.0
-        fr = W[_tw(p, 28)] if p < nc else 0.0
-        TX[5, p] = (fl - fr) * 0.05
-    for p in range(nc):
-        W[_tw(p, 4)] = TX[4, p] - TX[4, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 29 * SERIES_TILE] = ((alpha * W[o + 4 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.25 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 29)] if p > 0 else 0.0
-        fr = W[_tw(p, 29)] if p < nc else 0.0
-        TX[6, p] = (fl - fr) * 0.03333333333333333
-    for p in range(nc):
-        W[_tw(p, 5)] = TX[5, p] - TX[5, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 30 * SERIES_TILE] = ((alpha * W[o + 5 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.2 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 30)] if p > 0 else 0.0
-        fr = W[_tw(p, 30)] if p < nc else 0.0
-        TX[7, p] = (fl - fr) * 0.023809523809523808
-    for p in range(nc):
-        W[_tw(p, 6)] = TX[6, p] - TX[6, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 31 * SERIES_TILE] = ((alpha * W[o + 6 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.16666666666666666 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 31)] if p > 0 else 0.0
-        fr = W[_tw(p, 31)] if p < nc else 0.0
-        TX[8, p] = (fl - fr) * 0.017857142857142856
-    for p in range(nc):
-        W[_tw(p, 7)] = TX[7, p] - TX[7, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 32 * SERIES_TILE] = ((alpha * W[o + 7 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.14285714285714285 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 32)] if p > 0 else 0.0
-        fr = W[_tw(p, 32)] if p < nc else 0.0
-        TX[9, p] = (fl - fr) * 0.013888888888888888
-    for p in range(nc):
-        W[_tw(p, 8)] = TX[8, p] - TX[8, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 33 * SERIES_TILE] = ((alpha * W[o + 8 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.125 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 33)] if p > 0 else 0.0
-        fr = W[_tw(p, 33)] if p < nc else 0.0
-        TX[10, p] = (fl - fr) * 0.011111111111111112
-    for p in range(nc):
-        W[_tw(p, 9)] = TX[9, p] - TX[9, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 34 * SERIES_TILE] = ((alpha * W[o + 9 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.1111111111111111 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 34)] if p > 0 else 0.0
-        fr = W[_tw(p, 34)] if p < nc else 0.0
-        TX[11, p] = (fl - fr) * 0.00909090909090909
-    for p in range(nc):
-        W[_tw(p, 10)] = TX[10, p] - TX[10, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 35 * SERIES_TILE] = ((alpha * W[o + 10 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.1 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 35)] if p > 0 else 0.0
-        fr = W[_tw(p, 35)] if p < nc else 0.0
-        TX[12, p] = (fl - fr) * 0.007575757575757576
-    for p in range(nc):
-        W[_tw(p, 11)] = TX[11, p] - TX[11, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 36 * SERIES_TILE] = ((alpha * W[o + 11 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.09090909090909091 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 36)] if p > 0 else 0.0
-        fr = W[_tw(p, 36)] if p < nc else 0.0
-        TX[13, p] = (fl - fr) * 0.00641025641025641
-    for p in range(nc):
-        W[_tw(p, 12)] = TX[12, p] - TX[12, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 37 * SERIES_TILE] = ((alpha * W[o + 12 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.08333333333333333 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.4166666666666667 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.5833333333333334 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9166666666666666 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 37)] if p > 0 else 0.0
-        fr = W[_tw(p, 37)] if p < nc else 0.0
-        TX[14, p] = (fl - fr) * 0.005494505494505495
-    for p in range(nc):
-        W[_tw(p, 13)] = TX[13, p] - TX[13, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 38 * SERIES_TILE] = ((alpha * W[o + 13 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.15384615384615385 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.3076923076923077 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.46153846153846156 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6153846153846154 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7692307692307693 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9230769230769231 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.07692307692307693 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.23076923076923078 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.38461538461538464 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5384615384615384 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.6923076923076923 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8461538461538461 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 38)] if p > 0 else 0.0
-        fr = W[_tw(p, 38)] if p < nc else 0.0
-        TX[15, p] = (fl - fr) * 0.004761904761904762
-    for p in range(nc):
-        W[_tw(p, 14)] = TX[14, p] - TX[14, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 39 * SERIES_TILE] = ((alpha * W[o + 14 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.07142857142857142 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.21428571428571427 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.35714285714285715 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6428571428571429 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.7857142857142857 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9285714285714286 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 39)] if p > 0 else 0.0
-        fr = W[_tw(p, 39)] if p < nc else 0.0
-        TX[16, p] = (fl - fr) * 0.004166666666666667
-    for p in range(nc):
-        W[_tw(p, 15)] = TX[15, p] - TX[15, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 40 * SERIES_TILE] = ((alpha * W[o + 15 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.13333333333333333 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.26666666666666666 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5333333333333333 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9333333333333333 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.06666666666666667 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.4666666666666667 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7333333333333333 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8666666666666667 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 40)] if p > 0 else 0.0
-        fr = W[_tw(p, 40)] if p < nc else 0.0
-        TX[17, p] = (fl - fr) * 0.003676470588235294
-    for p in range(nc):
-        W[_tw(p, 16)] = TX[16, p] - TX[16, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 41 * SERIES_TILE] = ((alpha * W[o + 16 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.125 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.375 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.625 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.875 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.0625 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.1875 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3125 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.4375 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5625 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.6875 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8125 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9375 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 41)] if p > 0 else 0.0
-        fr = W[_tw(p, 41)] if p < nc else 0.0
-        TX[18, p] = (fl - fr) * 0.0032679738562091504
-    for p in range(nc):
-        W[_tw(p, 17)] = TX[17, p] - TX[17, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 42 * SERIES_TILE] = ((alpha * W[o + 17 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.11764705882352941 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.23529411764705882 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.35294117647058826 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.47058823529411764 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.5882352941176471 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7058823529411765 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8235294117647058 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9411764705882353 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.058823529411764705 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.17647058823529413 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.29411764705882354 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.4117647058823529 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5294117647058824 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6470588235294118 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7647058823529411 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8823529411764706 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 42)] if p > 0 else 0.0
-        fr = W[_tw(p, 42)] if p < nc else 0.0
-        TX[19, p] = (fl - fr) * 0.0029239766081871343
-    for p in range(nc):
-        W[_tw(p, 18)] = TX[18, p] - TX[18, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 43 * SERIES_TILE] = ((alpha * W[o + 18 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.1111111111111111 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2222222222222222 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.4444444444444444 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5555555555555556 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7777777777777778 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8888888888888888 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.05555555555555555 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.16666666666666666 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.2777777777777778 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.3888888888888889 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6111111111111112 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7222222222222222 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8333333333333334 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9444444444444444 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 43)] if p > 0 else 0.0
-        fr = W[_tw(p, 43)] if p < nc else 0.0
-        TX[20, p] = (fl - fr) * 0.002631578947368421
-    for p in range(nc):
-        W[_tw(p, 19)] = TX[19, p] - TX[19, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 44 * SERIES_TILE] = ((alpha * W[o + 19 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.10526315789473684 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.21052631578947367 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.3157894736842105 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.42105263157894735 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5263157894736842 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.631578947368421 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7368421052631579 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8421052631578947 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9473684210526315 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.05263157894736842 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.15789473684210525 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.2631578947368421 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.3684210526315789 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.47368421052631576 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.5789473684210527 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.6842105263157895 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.7894736842105263 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.8947368421052632 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 44)] if p > 0 else 0.0
-        fr = W[_tw(p, 44)] if p < nc else 0.0
-        TX[21, p] = (fl - fr) * 0.002380952380952381
-    for p in range(nc):
-        W[_tw(p, 20)] = TX[20, p] - TX[20, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 45 * SERIES_TILE] = ((alpha * W[o + 20 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.1 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.2 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.4 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.05 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.15 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.25 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.35 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.45 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.55 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.65 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.75 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.85 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.95 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 45)] if p > 0 else 0.0
-        fr = W[_tw(p, 45)] if p < nc else 0.0
-        TX[22, p] = (fl - fr) * 0.0021645021645021645
-    for p in range(nc):
-        W[_tw(p, 21)] = TX[21, p] - TX[21, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 46 * SERIES_TILE] = ((alpha * W[o + 21 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.09523809523809523 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.19047619047619047 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.2857142857142857 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.38095238095238093 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.47619047619047616 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5714285714285714 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6666666666666666 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7619047619047619 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8571428571428571 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9523809523809523 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 26 * SERIES_TILE]) + ((a1 * 0.047619047619047616 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.14285714285714285 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.23809523809523808 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.3333333333333333 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.42857142857142855 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5238095238095238 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6190476190476191 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7142857142857143 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8095238095238095 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9047619047619048 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 27 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 46)] if p > 0 else 0.0
-        fr = W[_tw(p, 46)] if p < nc else 0.0
-        TX[23, p] = (fl - fr) * 0.001976284584980237
-    for p in range(nc):
-        W[_tw(p, 22)] = TX[22, p] - TX[22, p + 1]
-    for t in range(nt):
-        for lane in range(SERIES_TILE):
-            o = t * TILE_STRIDE + lane
-            W[o + 47 * SERIES_TILE] = ((alpha * W[o + 22 * SERIES_TILE] * W[o + 25 * SERIES_TILE] + (a1 * 0.09090909090909091 - 1.0) * W[o + 2 * SERIES_TILE] * W[o + 45 * SERIES_TILE] + (a1 * 0.18181818181818182 - 1.0) * W[o + 4 * SERIES_TILE] * W[o + 43 * SERIES_TILE] + (a1 * 0.2727272727272727 - 1.0) * W[o + 6 * SERIES_TILE] * W[o + 41 * SERIES_TILE] + (a1 * 0.36363636363636365 - 1.0) * W[o + 8 * SERIES_TILE] * W[o + 39 * SERIES_TILE] + (a1 * 0.45454545454545453 - 1.0) * W[o + 10 * SERIES_TILE] * W[o + 37 * SERIES_TILE] + (a1 * 0.5454545454545454 - 1.0) * W[o + 12 * SERIES_TILE] * W[o + 35 * SERIES_TILE] + (a1 * 0.6363636363636364 - 1.0) * W[o + 14 * SERIES_TILE] * W[o + 33 * SERIES_TILE] + (a1 * 0.7272727272727273 - 1.0) * W[o + 16 * SERIES_TILE] * W[o + 31 * SERIES_TILE] + (a1 * 0.8181818181818182 - 1.0) * W[o + 18 * SERIES_TILE] * W[o + 29 * SERIES_TILE] + (a1 * 0.9090909090909091 - 1.0) * W[o + 20 * SERIES_TILE] * W[o + 27 * SERIES_TILE]) + ((a1 * 0.045454545454545456 - 1.0) * W[o + 1 * SERIES_TILE] * W[o + 46 * SERIES_TILE] + (a1 * 0.13636363636363635 - 1.0) * W[o + 3 * SERIES_TILE] * W[o + 44 * SERIES_TILE] + (a1 * 0.22727272727272727 - 1.0) * W[o + 5 * SERIES_TILE] * W[o + 42 * SERIES_TILE] + (a1 * 0.3181818181818182 - 1.0) * W[o + 7 * SERIES_TILE] * W[o + 40 * SERIES_TILE] + (a1 * 0.4090909090909091 - 1.0) * W[o + 9 * SERIES_TILE] * W[o + 38 * SERIES_TILE] + (a1 * 0.5 - 1.0) * W[o + 11 * SERIES_TILE] * W[o + 36 * SERIES_TILE] + (a1 * 0.5909090909090909 - 1.0) * W[o + 13 * SERIES_TILE] * W[o + 34 * SERIES_TILE] + (a1 * 0.6818181818181818 - 1.0) * W[o + 15 * SERIES_TILE] * W[o + 32 * SERIES_TILE] + (a1 * 0.7727272727272727 - 1.0) * W[o + 17 * SERIES_TILE] * W[o + 30 * SERIES_TILE] + (a1 * 0.8636363636363636 - 1.0) * W[o + 19 * SERIES_TILE] * W[o + 28 * SERIES_TILE] + (a1 * 0.9545454545454546 - 1.0) * W[o + 21 * SERIES_TILE] * W[o + 26 * SERIES_TILE])) * W[o + 48 * SERIES_TILE]
-    for p in range(m):
-        fl = W[_tw(p - 1, 47)] if p > 0 else 0.0
-        fr = W[_tw(p, 47)] if p < nc else 0.0
-        TX[24, p] = (fl - fr) * 0.0018115942028985507
+    f0 = 25  # row of f_0
+    for k in range(1, 23):
+        for p in range(nc):
+            W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]
+        for t in range(nt):
+            o = t * TILE_STRIDE
+            c = o + k * SERIES_TILE
+            f = o + f0 * SERIES_TILE
+            e0 = alpha * W[c + 0] * W[f + 0]
+            e1 = alpha * W[c + 1] * W[f + 1]
+            e2 = alpha * W[c + 2] * W[f + 2]
+            e3 = alpha * W[c + 3] * W[f + 3]
+            e4 = alpha * W[c + 4] * W[f + 4]
+            e5 = alpha * W[c + 5] * W[f + 5]
+            e6 = alpha * W[c + 6] * W[f + 6]
+            e7 = alpha * W[c + 7] * W[f + 7]
+            e8 = alpha * W[c + 8] * W[f + 8]
+            e9 = alpha * W[c + 9] * W[f + 9]
+            e10 = alpha * W[c + 10] * W[f + 10]
+            e11 = alpha * W[c + 11] * W[f + 11]
+            e12 = alpha * W[c + 12] * W[f + 12]
+            e13 = alpha * W[c + 13] * W[f + 13]
+            e14 = alpha * W[c + 14] * W[f + 14]
+            e15 = alpha * W[c + 15] * W[f + 15]
+            d0 = 0.0
+            d1 = 0.0
+            d2 = 0.0
+            d3 = 0.0
+            d4 = 0.0
+            d5 = 0.0
+            d6 = 0.0
+            d7 = 0.0
+            d8 = 0.0
+            d9 = 0.0
+            d10 = 0.0
+            d11 = 0.0
+            d12 = 0.0
+            d13 = 0.0
+            d14 = 0.0
+            d15 = 0.0
+            for j in range(1, k, 2):
+                w = a1 * J_OVER_K[k, j] - 1.0
+                c = o + j * SERIES_TILE
+                f = o + (f0 + k - j) * SERIES_TILE
+                d0 += w * W[c + 0] * W[f + 0]
+                d1 += w * W[c + 1] * W[f + 1]
+                d2 += w * W[c + 2] * W[f + 2]
+                d3 += w * W[c + 3] * W[f + 3]
+                d4 += w * W[c + 4] * W[f + 4]
+                d5 += w * W[c + 5] * W[f + 5]
+                d6 += w * W[c + 6] * W[f + 6]
+                d7 += w * W[c + 7] * W[f + 7]
+                d8 += w * W[c + 8] * W[f + 8]
+                d9 += w * W[c + 9] * W[f + 9]
+                d10 += w * W[c + 10] * W[f + 10]
+                d11 += w * W[c + 11] * W[f + 11]
+                d12 += w * W[c + 12] * W[f + 12]
+                d13 += w * W[c + 13] * W[f + 13]
+                d14 += w * W[c + 14] * W[f + 14]
+                d15 += w * W[c + 15] * W[f + 15]
+            for j in range(2, k, 2):
+                w = a1 * J_OVER_K[k, j] - 1.0
+                c = o + j * SERIES_TILE
+                f = o + (f0 + k - j) * SERIES_TILE
+                e0 += w * W[c + 0] * W[f + 0]
+                e1 += w * W[c + 1] * W[f + 1]
+                e2 += w * W[c + 2] * W[f + 2]
+                e3 += w * W[c + 3] * W[f + 3]
+                e4 += w * W[c + 4] * W[f + 4]
+                e5 += w * W[c + 5] * W[f + 5]
+                e6 += w * W[c + 6] * W[f + 6]
+                e7 += w * W[c + 7] * W[f + 7]
+                e8 += w * W[c + 8] * W[f + 8]
+                e9 += w * W[c + 9] * W[f + 9]
+                e10 += w * W[c + 10] * W[f + 10]
+                e11 += w * W[c + 11] * W[f + 11]
+                e12 += w * W[c + 12] * W[f + 12]
+                e13 += w * W[c + 13] * W[f + 13]
+                e14 += w * W[c + 14] * W[f + 14]
+                e15 += w * W[c + 15] * W[f + 15]
+            c = o + (f0 + k) * SERIES_TILE
+            f = o + 48 * SERIES_TILE
+            W[c + 0] = (e0 + d0) * W[f + 0]
+            W[c + 1] = (e1 + d1) * W[f + 1]
+            W[c + 2] = (e2 + d2) * W[f + 2]
+            W[c + 3] = (e3 + d3) * W[f + 3]
+            W[c + 4] = (e4 + d4) * W[f + 4]
+            W[c + 5] = (e5 + d5) * W[f + 5]
+            W[c + 6] = (e6 + d6) * W[f + 6]
+            W[c + 7] = (e7 + d7) * W[f + 7]
+            W[c + 8] = (e8 + d8) * W[f + 8]
+            W[c + 9] = (e9 + d9) * W[f + 9]
+            W[c + 10] = (e10 + d10) * W[f + 10]
+            W[c + 11] = (e11 + d11) * W[f + 11]
+            W[c + 12] = (e12 + d12) * W[f + 12]
+            W[c + 13] = (e13 + d13) * W[f + 13]
+            W[c + 14] = (e14 + d14) * W[f + 14]
+            W[c + 15] = (e15 + d15) * W[f + 15]
+        s = SERIES_SCALE[k]
+        for p in range(m):
+            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+            fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+            TX[k + 2, p] = (fl - fr) * s
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
         W[_tw(p, 24)] = TX[24, p] - TX[24, p + 1]
 
 
-@njit(fastmath={"contract"})
+@kernel(fastmath={"contract"})
 def _series_bounds(W, nc, h):
     """Bounds of every contact lane's compression over a series step [0, h].
 
@@ -710,13 +591,13 @@ def _series_bounds(W, nc, h):
 # ---- END GENERATED STAGES ----
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _tw(p, r):
     """Index in the work tiles TW of row r of contact lane p."""
     return (p // SERIES_TILE) * TILE_STRIDE + r * SERIES_TILE + p % SERIES_TILE
 
 
-@njit(fastmath={"contract"})
+@kernel(fastmath={"contract"})
 def _taylor(S):
     """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
 
@@ -732,8 +613,8 @@ def _taylor(S):
     loop runs across the window, clusters and all: the gap after a cluster's last ball
     is a contact lane whose force is masked to 0. The lanes are independent, so the
     loops vectorise, where a loop over one contact's orders would be one long chain;
-    each order's sum over the lower ones is written out (_series_orders, generated
-    by _codegen), one pass over the window's tiles per order.
+    each order's sum over the lower ones is a pass over the window's tiles
+    (_series_orders, generated by _codegen).
 
     Returns the longest step whose truncation (estimated by the last two terms of x
     and of v) is within TAYLOR_TOL of the tolerance, or 0 where the series does not
@@ -810,7 +691,7 @@ def _taylor(S):
     return 0.9 * h
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _taylor_at(S, p, s):
     """(x, v) of compact ball p at time s after the step's start, from its series."""
     T = S.TX
@@ -822,7 +703,7 @@ def _taylor_at(S, p, s):
     return x * s + T[0, p], v
 
 
-@njit(fastmath={"contract"})
+@kernel(fastmath={"contract"})
 def _taylor_step(S, h):
     """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
 
@@ -848,7 +729,7 @@ def _taylor_step(S, h):
                S.fs[F_QV1] * h1 * h, S.fs[F_QV2] * h1)
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _series_at(T, s):
     """The polynomial sum_k T[k] s^k (Horner)."""
     y = T[PT]
@@ -857,7 +738,7 @@ def _series_at(T, s):
     return y
 
 
-@njit
+@kernel
 def _contact_series(S, j):
     """The series of contact j's compression over the last (series) step into TD.
 
@@ -883,7 +764,7 @@ def _contact_series(S, j):
         TD[1] -= S.bv[j + 1]
 
 
-@njit
+@kernel
 def _sample_series(S, ns, h):
     """TD's polynomial at s = h (i + 1) / ns, i < ns, into TS[1] (TS[0]: the s).
 
@@ -899,7 +780,7 @@ def _sample_series(S, ns, h):
             YS[i] = YS[i] * SS[i] + tk
 
 
-@njit
+@kernel
 def _pressed_in_step(S, j):
     """Whether fresh contact j was pressed beyond eps_rel inside the last series step."""
     h = S.fs[F_HLAST]
@@ -915,7 +796,7 @@ def _pressed_in_step(S, j):
     return False
 
 
-@njit
+@kernel
 def _bernstein_range(T, h, B):
     """Bounds of the polynomial sum_k T[k] s^k over s in [0, h] (B: scratch).
 
@@ -947,7 +828,7 @@ def _bernstein_range(T, h, B):
     return lo - r, hi + r
 
 
-@njit
+@kernel
 def _curvature_bound(S, j):
     """A bound on |c''| of contact j over the last (DOP853) step: the larger of |c''| at
     its two ends (the step is short)."""
@@ -958,7 +839,7 @@ def _curvature_bound(S, j):
     return max(abs(g0), abs(g1))
 
 
-@njit
+@kernel
 def _stays_open(T, h, level, floor, D, B):
     """Whether an open contact whose compression is sum_k T[k] s^k can neither close nor
     engage for s in [0, h] (D, B: scratch).
@@ -997,7 +878,7 @@ def _stays_open(T, h, level, floor, D, B):
     return _bernstein_range(D, h, B)[1] < floor
 
 
-@njit
+@kernel
 def _step(S, h):
     """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm.
 
@@ -1020,7 +901,7 @@ def _step(S, h):
     return err
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _interp_rows(S, p):
     """Rows 0..6 of compact ball p's interpolant (its dense stages are in KV)."""
     h = S.fs[F_HLAST]
@@ -1036,7 +917,7 @@ def _interp_rows(S, p):
     _dense_rows(S, p)
 
 
-@njit
+@kernel
 def _dense(S):
     """Build the order-7 interpolant of the last accepted step for every ball."""
     if S.ints[I_DENSE] == 1:
@@ -1047,7 +928,7 @@ def _dense(S):
     S.ints[I_DENSE] = 1
 
 
-@njit
+@kernel
 def _dense_at(S, p):
     """Build the interpolant of compact ball p alone, unless it is built already.
 
@@ -1062,7 +943,7 @@ def _dense_at(S, p):
     S.DM[p] = S.ints[I_DSTAMP]
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _poly(F, y0, p, th):
     u = 1.0 - th
     return y0 + th * (F[0, p] + u * (F[1, p] + th * (F[2, p] + u * (F[3, p] + th * (
@@ -1072,7 +953,7 @@ def _poly(F, y0, p, th):
 # =========================================================================================
 # positions of any ball inside the last step (theta in [0, 1]) or now
 # =========================================================================================
-@njit(inline="always")
+@kernel(inline="always")
 def _ball_at(S, b, th):
     """(x, v) of ball b at t_prev + th * h_last (its interpolant is built if need be)."""
     p = S.bmap[b]
@@ -1089,7 +970,7 @@ def _ball_at(S, b, th):
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _ball_now(S, b):
     p = S.bmap[b]
     if p >= 0:
@@ -1100,7 +981,7 @@ def _ball_now(S, b):
 # =========================================================================================
 # heap of free-pair collisions (lazy invalidation by per-contact stamps)
 # =========================================================================================
-@njit
+@kernel
 def _heap_push(S, t, j):
     n = S.ints[I_NHEAP]
     if n >= S.hp_t.shape[0]:
@@ -1121,14 +1002,14 @@ def _heap_push(S, t, j):
         i = q
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _heap_swap(S, a, b):
     S.hp_t[a], S.hp_t[b] = S.hp_t[b], S.hp_t[a]
     S.hp_j[a], S.hp_j[b] = S.hp_j[b], S.hp_j[a]
     S.hp_s[a], S.hp_s[b] = S.hp_s[b], S.hp_s[a]
 
 
-@njit
+@kernel
 def _heap_pop(S):
     n = S.ints[I_NHEAP] - 1
     S.ints[I_NHEAP] = n
@@ -1150,7 +1031,7 @@ def _heap_pop(S):
         i = c
 
 
-@njit
+@kernel
 def _heap_valid_top(S):
     """Drop stale entries; return whether a valid entry is on top."""
     while S.ints[I_NHEAP] > 0:
@@ -1161,7 +1042,7 @@ def _heap_valid_top(S):
     return False
 
 
-@njit
+@kernel
 def _heap_compact(S):
     n = S.ints[I_NHEAP]
     k = 0
@@ -1190,7 +1071,7 @@ def _heap_compact(S):
             q = c
 
 
-@njit
+@kernel
 def _schedule_pair(S, j):
     """Predict the collision of free balls j, j+1 if they approach at >= floor."""
     if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
@@ -1209,7 +1090,7 @@ def _schedule_pair(S, j):
 # =========================================================================================
 # cluster bookkeeping (the list is sorted by lo and small)
 # =========================================================================================
-@njit(inline="always")
+@kernel(inline="always")
 def _find_cluster(S, b):
     lo = 0
     hi = S.ints[I_NCL] - 1
@@ -1224,7 +1105,7 @@ def _find_cluster(S, b):
     return -1
 
 
-@njit
+@kernel
 def _sync(S):
     """Write the compact state back to the balls (all at the current time).
 
@@ -1240,7 +1121,7 @@ def _sync(S):
         S.bt[b] = t
 
 
-@njit
+@kernel
 def _remove_cluster(S, c):
     n = S.ints[I_NCL]
     for i in range(c, n - 1):
@@ -1249,7 +1130,7 @@ def _remove_cluster(S, c):
     S.ints[I_NCL] = n - 1
 
 
-@njit
+@kernel
 def _insert_cluster(S, lo, hi):
     n = S.ints[I_NCL]
     if n >= S.clo.shape[0]:
@@ -1265,7 +1146,7 @@ def _insert_cluster(S, lo, hi):
     return True
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _touch_ball(S, b):
     """Invalidate predictions involving ball b."""
     if b - 1 >= 0:
@@ -1274,7 +1155,7 @@ def _touch_ball(S, b):
         S.stamp[b] += 1
 
 
-@njit
+@kernel
 def _free_ball(S, b):
     S.sep_t[b] = S.fs[F_T]
     S.sep_v[b] = S.bv[b]
@@ -1286,7 +1167,7 @@ def _free_ball(S, b):
         S.ints[I_NFREED] = n + 1
 
 
-@njit
+@kernel
 def _activate(S, j, state):
     """Make contact j active, joining the clusters/balls on both sides."""
     S.cst[j] = state
@@ -1310,7 +1191,7 @@ def _activate(S, j, state):
     return ok
 
 
-@njit
+@kernel
 def _deactivate(S, j, level):
     """Make contact j inactive (engages again beyond ``level``), splitting its cluster."""
     S.cst[j] = OPEN
@@ -1334,7 +1215,7 @@ def _deactivate(S, j, level):
     return ok
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _potential(c, mode, alpha):
     """|c|^(alpha+1)/(alpha+1): the energy of an active contact's (odd-continued) force."""
     a = abs(c)
@@ -1345,7 +1226,7 @@ def _potential(c, mode, alpha):
     return a ** (alpha + 1.0) / (alpha + 1.0)
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _mean_velocity(S, o, e):
     u = 0.0
     for p in range(o, e + 1):
@@ -1353,7 +1234,7 @@ def _mean_velocity(S, o, e):
     return u / (e - o + 1)
 
 
-@njit
+@kernel
 def _cluster_energy(S, c):
     """Internal energy of cluster c: kinetic energy about its mean velocity plus potential.
 
@@ -1374,7 +1255,7 @@ def _cluster_energy(S, c):
     return en
 
 
-@njit
+@kernel
 def _project_energy(S):
     """Restore each cluster's internal energy, conserved exactly between changes of structure.
 
@@ -1417,7 +1298,7 @@ def _project_energy(S):
                 S.V[p] = us + lam * (S.V[p] - us)
 
 
-@njit
+@kernel
 def _rebuild(S):
     """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
     ncl = S.ints[I_NCL]
@@ -1465,7 +1346,7 @@ def _rebuild(S):
 # =========================================================================================
 # events
 # =========================================================================================
-@njit(inline="always")
+@kernel(inline="always")
 def _log(S, t, j, kind):
     n = S.ints[I_NEV]
     S.ev_t[n] = t
@@ -1475,14 +1356,35 @@ def _log(S, t, j, kind):
     S.ints[I_EVTOTAL] += 1
 
 
-@njit(inline="always")
+@kernel
 def _contact_at(S, j, th):
+    """(compression, its rate, |x_l| + |x_r|) of contact j at t_prev + th * h_last."""
     xl, vl = _ball_at(S, j, th)
     xr, vr = _ball_at(S, j + 1, th)
     return xl - xr, vl - vr, abs(xl) + abs(xr)
 
 
-@njit
+@kernel(inline="always")
+def _ball_end(S, b, th):
+    """(x, v) of ball b at the start (th = 0) or the end (th = 1) of the last step."""
+    p = S.bmap[b]
+    if p >= 0:
+        if th >= 1.0:
+            return S.X[p], S.V[p]
+        return S.X0[p], S.V0[p]
+    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+
+
+@kernel(inline="always")
+def _contact_end(S, j, th):
+    """_contact_at at th = 0 or 1, where no interpolant is needed (inlined)."""
+    xl, vl = _ball_end(S, j, th)
+    xr, vr = _ball_end(S, j + 1, th)
+    return xl - xr, vl - vr, abs(xl) + abs(xr)
+
+
+@kernel
 def _crossing(S, j, ta, tb, ca, cb_, level):
     """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi."""
     fa = ca - level
@@ -1514,17 +1416,17 @@ def _crossing(S, j, ta, tb, ca, cb_, level):
     return tb
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _rounding(scale):
     return 16.0 * EPS * max(1.0, scale)
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _may_cross(c0, c1, reach, level):
     return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
 
 
-@njit
+@kernel
 def _contact_event(S, j, hcap):
     """Earliest event of contact j in the last step before ``hcap``.
 
@@ -1537,8 +1439,8 @@ def _contact_event(S, j, hcap):
         # never pressed beyond eps_rel: its force is below the floor, so it is checked
         # at the step's end (_release_quiet), like a dormant contact
         return 2.0, 0, 0.0
-    c0, w0, s0 = _contact_at(S, j, 0.0)
-    c1, w1, s1 = _contact_at(S, j, 1.0)
+    c0, w0, s0 = _contact_end(S, j, 0.0)
+    c1, w1, s1 = _contact_end(S, j, 1.0)
     h = S.fs[F_HLAST]
     if st == FRESH:
         # a series step is long enough for a fresh contact to be pressed beyond
@@ -1639,7 +1541,7 @@ def _contact_event(S, j, hcap):
     return 2.0, 0, 0.0
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
 
@@ -1659,7 +1561,7 @@ def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     return False
 
 
-@njit
+@kernel
 def _find_event(S):
     """Scan the contacts touching clusters for the earliest event of the last step."""
     best = 2.0
@@ -1704,8 +1606,8 @@ def _find_event(S):
                         continue
             else:
                 # quick rejections at a cluster's edge; the general path repeats them
-                cq0 = _contact_at(S, j, 0.0)[0]
-                cq1 = _contact_at(S, j, 1.0)[0]
+                cq0 = _contact_end(S, j, 0.0)[0]
+                cq1 = _contact_end(S, j, 1.0)[0]
                 if st == DORMANT:
                     if cq1 < S.fs[F_LLOCATE]:
                         continue
@@ -1728,7 +1630,7 @@ def _find_event(S):
 # =========================================================================================
 # the step loop
 # =========================================================================================
-@njit
+@kernel
 def _save_start(S):
     for p in range(S.ints[I_M]):
         S.X0[p] = S.X[p]
@@ -1736,7 +1638,7 @@ def _save_start(S):
         S.A0[p] = S.A[p]
 
 
-@njit
+@kernel
 def _restore_start(S):
     for p in range(S.ints[I_M]):
         S.X[p] = S.X0[p]
@@ -1744,7 +1646,7 @@ def _restore_start(S):
         S.A[p] = S.A0[p]
 
 
-@njit
+@entry
 def _snapshot(S, tout):
     """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
     t = S.fs[F_T]
@@ -1773,7 +1675,7 @@ def _snapshot(S, tout):
             S.ov[b] = S.bv[b]
 
 
-@njit
+@kernel
 def _engage_level(S, j):
     """Compression beyond which contact j, made inactive now, engages again.
 
@@ -1787,7 +1689,7 @@ def _engage_level(S, j):
     return max(xl - xr, 0.0) + max(S.fs[F_EPSREL], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
-@njit
+@kernel
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
@@ -1805,7 +1707,7 @@ def _apply_event(S, j, kind):
     return ok
 
 
-@njit
+@kernel
 def _season(S):
     """Season the fresh contacts pressed beyond eps_rel in the last step (made ACTIVE).
 
@@ -1829,7 +1731,7 @@ def _season(S):
                     S.cst[j] = ACTIVE
 
 
-@njit
+@kernel
 def _release_quiet(S):
     """Release the contacts below the floor.
 
@@ -1874,7 +1776,7 @@ def _release_quiet(S):
     return True
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _due(S, j):
     """The event contact j is due at this instant, if its state disagrees with its motion.
 
@@ -1913,7 +1815,7 @@ def _due(S, j):
     return 0
 
 
-@njit
+@kernel
 def _dormant_due(S):
     """Whether a dormant contact at a cluster's edge has been pressed (or pulled) past its levels."""
     ncont = S.cst.shape[0]
@@ -1929,7 +1831,7 @@ def _dormant_due(S):
     return False
 
 
-@njit
+@kernel
 def _settle(S):
     """After a change of structure, apply every event due at this instant (positions synced)."""
     ncont = S.cst.shape[0]
@@ -1955,7 +1857,7 @@ def _settle(S):
     return True
 
 
-@njit
+@kernel
 def _post_step(S):
     """After an accepted step or jump: season contacts, then apply its event or release contacts."""
     if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
@@ -1977,7 +1879,7 @@ def _post_step(S):
     return True
 
 
-@njit(inline="always")
+@kernel(inline="always")
 def _end_ball(S, b, t):
     p = S.bmap[b]
     if p >= 0:
@@ -1985,7 +1887,7 @@ def _end_ball(S, b, t):
     return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b], 0.0
 
 
-@njit
+@entry
 def advance(S):
     """Run until something needs the driver; return a status code (ST_*).
 

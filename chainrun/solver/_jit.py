@@ -1,0 +1,174 @@
+"""How the solver's kernels are compiled, cached and loaded.
+
+Two decorators: ``kernel`` for functions called only from other kernels (no Python
+wrapper, no cache entry of their own: their code is linked into the entry points that
+call them) and ``entry`` for the few that Python calls (cached). Both are compiled
+without numba's reference counting: the kernels allocate nothing.
+
+The cache lives in a folder of its own, named by a hash of the solver's sources and of
+the compiler's versions (``cache_dir``). numba's own cache notices a change in the file
+of an entry point but not in a kernel it calls from another file, nor a change in the
+generated code; a folder keyed by every source cannot go stale. ``NUMBA_CACHE_DIR``, if
+set, is where that folder goes; otherwise the user's cache folder.
+
+Entry points compile with LLVM's SLP vectoriser on (numba leaves it off by default):
+the series sums (``_series_orders``) write a tile's lanes out as scalars, which it
+packs into vector instructions. ``prepare`` compiles (or loads) an entry point before
+the clock of a run starts and tells the user on stderr when that means compiling.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numba as nb
+from numba.core import config
+
+#: a cold compile on a 2-core machine of the kind CI runs on, for the message
+COMPILE_ESTIMATE_S = 40
+#: after this many seconds of loading, say that it is compiling, and every so often after
+_NOTICE_AFTER_S = 2.0
+_PROGRESS_EVERY_S = 10.0
+
+_OPTIONS = dict(_nrt=False)
+kernel = functools.partial(nb.njit, no_cpython_wrapper=True, no_cfunc_wrapper=True,
+                           **_OPTIONS)
+
+
+def entry(fn):
+    """A kernel that Python calls: cached in ``cache_dir()``, compiled with SLP on.
+
+    However its first call comes (``prepare`` or a direct call), what it compiles,
+    and so caches, is the vectorised code.
+    """
+    with caching_into(cache_dir()):
+        dispatcher = nb.njit(cache=True, **_OPTIONS)(fn)
+    compile_ = dispatcher.compile
+
+    def compile(sig):
+        with _slp_vectorised():
+            return compile_(sig)
+
+    dispatcher.compile = compile
+    return dispatcher
+
+
+def source_hash(folder: Path = Path(__file__).parent) -> str:
+    """sha256 of the solver package's sources and of the Python, numba, llvmlite versions."""
+    import llvmlite
+
+    h = hashlib.sha256()
+    for path in sorted(folder.glob("*.py")):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    versions = f"{sys.version_info[:3]} numba {nb.__version__} llvmlite {llvmlite.__version__}"
+    h.update(versions.encode())
+    return h.hexdigest()
+
+
+def cache_root() -> Path:
+    """Where the compiled kernels go: ``$NUMBA_CACHE_DIR``, else the user's cache folder."""
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg) if xdg else Path.home() / ".cache"
+    return base / "chainrun"
+
+
+def cache_dir() -> Path:
+    return cache_root() / f"kernels-{source_hash()[:16]}"
+
+
+@contextlib.contextmanager
+def caching_into(folder: Path):
+    """numba's cache folder while the entry points are defined (their cache is made then)."""
+    old = config.CACHE_DIR
+    config.CACHE_DIR = str(folder)
+    try:
+        yield
+    finally:
+        config.CACHE_DIR = old
+
+
+@contextlib.contextmanager
+def _slp_vectorised():
+    old = config.SLP_VECTORIZE
+    config.SLP_VECTORIZE = 1
+    try:
+        yield
+    finally:
+        config.SLP_VECTORIZE = old
+
+
+def _cached(dispatcher, folder: Path) -> bool:
+    """Whether the cache folder has an index for this entry point (a fast look, no load)."""
+    name = dispatcher.py_func.__qualname__
+    return any(folder.rglob(f"*.{name}-*.nbi"))
+
+
+class _Notice:
+    """Tells the user on stderr that the solver is being compiled, with the time so far."""
+
+    def __init__(self, stream, now: bool):
+        self.stream = stream
+        self.t0 = time.perf_counter()
+        self.said = False
+        self.done = threading.Event()
+        if now:
+            self._say()
+        self.thread = threading.Thread(target=self._watch, daemon=True)
+        self.thread.start()
+
+    def _say(self):
+        self.said = True
+        print(f"compiling the solver for this machine (first run only, about "
+              f"{COMPILE_ESTIMATE_S} s)...", file=self.stream, flush=True)
+
+    def _watch(self):
+        if not self.said and not self.done.wait(_NOTICE_AFTER_S):
+            self._say()
+        while not self.done.wait(_PROGRESS_EVERY_S):
+            print(f"  still compiling, {time.perf_counter() - self.t0:.0f} s so far",
+                  file=self.stream, flush=True)
+
+    def close(self):
+        self.done.set()
+        self.thread.join()
+        if self.said:
+            print(f"compiled in {time.perf_counter() - self.t0:.0f} s; later runs start at once",
+                  file=self.stream, flush=True)
+
+
+def prepare(dispatcher, *args, folder: Path | None = None, stream=None) -> bool:
+    """Compile ``dispatcher`` for ``args``' types, or load it from the cache.
+
+    Returns True if it was compiled or loaded now, False if it was ready already.
+    """
+    sig = tuple(nb.typeof(a) for a in args)
+    if sig in dispatcher.overloads:
+        return False
+    folder = cache_dir() if folder is None else folder
+    notice = _Notice(sys.stderr if stream is None else stream,
+                     now=not _cached(dispatcher, folder))
+    try:
+        dispatcher.compile(sig)
+    finally:
+        notice.close()
+    return True
+
+
+@functools.cache
+def python_twin(dispatcher):
+    """A copy of a kernel that Python can call (tests and debugging), compiled on first use.
+
+    ``kernel`` functions have no Python wrapper; this compiles the same function with one,
+    outside the cache.
+    """
+    return nb.njit(**_OPTIONS)(dispatcher.py_func)
