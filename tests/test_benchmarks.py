@@ -8,6 +8,8 @@ honest, in a few seconds.
 from __future__ import annotations
 
 import re
+import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -100,6 +102,28 @@ def test_generated_config_is_a_valid_experiment():
     assert spec.times.size == 200 and spec.times[-1] == 1270.0
 
 
-def test_git_commit_is_read_without_git():
-    commit = run.git_commit()
-    assert commit is None or re.fullmatch(r"[0-9a-f]{40}", commit)
+def _git(*args, cwd):
+    return subprocess.run(["git", *args], cwd=cwd, check=True, capture_output=True,
+                          text=True).stdout.strip()
+
+
+def test_git_commit_is_read_without_git(tmp_path):
+    """The commit read from .git's files is git's own, on a branch, a detached head and
+    with the branch's ref packed; a folder that is no repository gives None."""
+    if shutil.which("git") is None:
+        pytest.skip("git is not installed")
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    env = ["-c", "user.name=t", "-c", "user.email=t@t"]
+    _git("init", "-q", cwd=repo)
+    (repo / "a").write_text("a")
+    _git("add", "a", cwd=repo)
+    _git(*env, "commit", "-q", "-m", "a", cwd=repo)
+    head = _git("rev-parse", "HEAD", cwd=repo)
+    assert re.fullmatch(r"[0-9a-f]{40}", head)
+    assert run.git_commit(repo) == head  # loose ref
+    _git("pack-refs", "--all", cwd=repo)
+    assert run.git_commit(repo) == head  # packed ref
+    _git("checkout", "-q", "--detach", cwd=repo)
+    assert run.git_commit(repo) == head  # detached
+    assert run.git_commit(tmp_path / "none") is None
