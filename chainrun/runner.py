@@ -34,6 +34,7 @@ from typing import Callable
 
 import numpy as np
 
+from chainrun import atomic
 from chainrun.config import Experiment, RunSpec
 from chainrun.errors import ChainrunError, StoreError
 
@@ -280,10 +281,7 @@ def partial_files(outdir, specs: list[RunSpec]) -> list[Path]:
     read, so they are harmless; a completed sweep removes them.
     """
     outdir = Path(outdir)
-    if not outdir.is_dir():
-        return []
-    prefixes = tuple(f".{run_file(outdir, s).name}.partial-" for s in specs)
-    return sorted(p for p in outdir.iterdir() if p.name.startswith(prefixes))
+    return atomic.leftovers(outdir, [run_file(outdir, s).name for s in specs])
 
 
 # ------------------------------------------------------------------------- executors

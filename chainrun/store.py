@@ -15,9 +15,9 @@ dimension scales (``time``, ``ball``, ``spatial``, ``event``), so
 ``xarray.open_datatree(path, engine="h5netcdf")`` opens a run file with named
 dimensions.
 
-Files are written to a temporary name beside the target (``.<name>.partial-<pid>``),
-flushed to disk and renamed over the target only when complete, so a reader never
-sees a half-written file under the final name.
+Files are written atomically (``chainrun.atomic``): under a temporary name beside the
+target, flushed to disk and renamed over it only when complete, so a reader never sees
+a half-written file under the final name.
 
 References
 ----------
@@ -43,6 +43,7 @@ import h5py
 import numpy as np
 
 import chainrun
+from chainrun import atomic
 from chainrun.errors import StoreError
 from chainrun.solver import EventKind, Solution
 from chainrun.solver import physics
@@ -252,31 +253,6 @@ def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],
     return ds
 
 
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:  # not possible on every platform; the rename is still atomic
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def _temp_name(path: Path) -> Path:
-    return path.with_name(f".{path.name}.partial-{os.getpid()}")
-
-
 def _create(path: Path, temp: Path, what: str) -> h5py.File:
     if not path.parent.is_dir():
         raise StoreError(f"{path}: cannot create {what} (no folder {path.parent})")
@@ -297,8 +273,7 @@ def _commit(h5: h5py.File, temp: Path, path: Path) -> None:
     try:
         h5.flush()
         h5.close()
-        _fsync(temp)
-        os.replace(temp, path)
+        atomic.put_in_place(temp, path)
     except OSError as exc:
         try:
             temp.unlink()
@@ -306,7 +281,6 @@ def _commit(h5: h5py.File, temp: Path, path: Path) -> None:
             pass
         reason = exc.strerror or str(exc)
         raise StoreError(f"{path}: cannot write ({reason})") from None
-    _fsync_dir(path.parent)
 
 
 def _discard(h5: h5py.File | None, temp: Path) -> None:
@@ -491,7 +465,7 @@ class RunWriter:
 
     def __init__(self, path, spec: RunSpec, *, velocity_floor: float):
         self.path = Path(path)
-        self.temp_path = _temp_name(self.path)
+        self.temp_path = atomic.temp_name(self.path)
         self._spec = spec
         self._n = int(spec.n)
         self._alpha = float(spec.alpha)
@@ -965,7 +939,7 @@ def write_index(path, experiment: str, entries: list[dict]) -> None:
         if key not in kinds and all(key in e for e in entries):
             kinds[key] = _kind_of(e[key] for e in entries)
 
-    temp = _temp_name(path)
+    temp = atomic.temp_name(path)
     h5 = _create(path, temp, "index file")
     try:
         _stamp(h5, INDEX_FORMAT)
@@ -1162,7 +1136,7 @@ def write_analysis(path, data: AnalysisData) -> None:
     if missing:
         raise StoreError(f"{path}: inputs lack {', '.join(sorted(set(missing)))}")
 
-    temp = _temp_name(path)
+    temp = atomic.temp_name(path)
     h5 = _create(path, temp, "analysis file")
     try:
         _stamp(h5, ANALYSIS_FORMAT)

@@ -20,7 +20,7 @@ import importlib
 from contextlib import contextmanager
 from pathlib import Path
 
-from chainrun import artefacts
+from chainrun import artefacts, atomic
 from chainrun.errors import ChainrunError
 from chainrun.store import AnalysisData, read_analysis
 
@@ -92,24 +92,11 @@ def render(name: str, *, results="results") -> list[Path]:
             figure = module.draw(data)
             for path in outputs:
                 metadata = PNG_METADATA if path.suffix == ".png" else PDF_METADATA
-                _atomic(path, lambda tmp: figure.savefig(tmp, format=path.suffix[1:],
-                                                         metadata=metadata))
+                atomic.write(path, lambda tmp: figure.savefig(
+                    tmp, format=path.suffix[1:], metadata=metadata))
     else:
         texts = module.write(data)
         for path in outputs:
             text = texts[path.suffix]
-            _atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+            atomic.write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return outputs
-
-
-def _atomic(path: Path, write) -> None:
-    """Write through a temporary name beside ``path``, then rename over it."""
-    import os
-
-    temp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    try:
-        write(temp)
-        os.replace(temp, path)
-    finally:
-        if temp.exists():
-            temp.unlink()
