@@ -8,7 +8,6 @@ from), never by pixels; files are tested for identical bytes on a second renderi
 
 from __future__ import annotations
 
-import ast
 import hashlib
 import importlib
 import json
@@ -129,27 +128,6 @@ def test_style_is_shipped_and_reproducible():
 
     params = matplotlib.rc_params_from_file(STYLE, use_default_template=False)
     assert params["svg.hashsalt"] == "chainrun" and params["pdf.fonttype"] == 42
-
-
-# --------------------------------------------------------------------- import arrows
-def _imports(package: str) -> set[str]:
-    found = set()
-    for path in (ROOT / "chainrun" / package).glob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                found |= {a.name for a in node.names}
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                found.add(node.module)
-    return found
-
-
-def test_import_arrows_point_one_way():
-    analysis = _imports("analysis")
-    plotting = _imports("plotting")
-    assert not {m for m in analysis if m.split(".")[0] in ("click", "matplotlib", "h5py")}
-    assert not {m for m in analysis if m.startswith("chainrun.plotting")}
-    assert not {m for m in plotting if m.split(".")[0] in ("click", "h5py", "scipy")}
-    assert not {m for m in plotting if m.startswith(("chainrun.analysis", "chainrun.solver"))}
 
 
 # ---------------------------------------------------------------- the plotted data

@@ -1,0 +1,76 @@
+"""The package's imports run one way: config -> solver -> store -> analysis -> plotting.
+
+Each part may import only the parts below it (DESIGN.md: data flows one way, one home
+per stage); the command line sits on top. Read from the source, so a lazy import
+inside a function counts as much as one at the top of a file.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: rank of each part: a part imports only parts of lower rank (or itself)
+RANK = {
+    "chainrun.errors": 0, "chainrun.atomic": 0, "chainrun._gc": 0,
+    "chainrun.solver": 1,
+    "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
+    "chainrun.store": 3,
+    "chainrun.runner": 4, "chainrun.analysis": 4,
+    "chainrun.plotting": 5,
+    "chainrun.cli": 6,
+    "chainrun": 7, "chainrun.__main__": 7,
+}
+#: outside libraries a part must not use (the solver never touches files, the
+#: analysis draws nothing, only the store touches HDF5)
+FORBIDDEN = {
+    "chainrun.solver": {"h5py", "click", "matplotlib", "pydantic", "yaml", "dask"},
+    "chainrun.config": {"h5py", "click", "matplotlib"},
+    "chainrun.analysis": {"click", "matplotlib", "h5py"},
+    "chainrun.plotting": {"click", "h5py", "scipy"},
+    "chainrun.runner": {"click", "matplotlib"},
+}
+EXTRA = {("chainrun.plotting", "chainrun.runner"), ("chainrun.plotting", "chainrun.analysis")}
+
+
+def _part(module: str) -> str:
+    while module not in RANK:
+        module = module.rpartition(".")[0]
+    return module
+
+
+def _imports():
+    for path in sorted((ROOT / "chainrun").rglob("*.py")):
+        rel = path.relative_to(ROOT).with_suffix("")
+        name = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                targets = [f"{node.module}.{a.name}" for a in node.names]
+            else:
+                continue
+            for target in targets:
+                yield name, target
+
+
+def test_every_module_belongs_to_a_part():
+    assert all(_part(name) for name, _ in _imports())
+
+
+def test_imports_point_down_the_pipeline():
+    wrong = set()
+    for name, target in _imports():
+        src = _part(name)
+        if target.split(".")[0] != "chainrun":
+            if target.split(".")[0] in FORBIDDEN.get(src, ()):
+                wrong.add((name, target))
+            continue
+        if target in ("chainrun", "chainrun.__version__"):
+            continue  # the version, for the files' provenance
+        dst = _part(target)
+        if dst != src and (RANK[dst] >= RANK[src] or (src, dst) in EXTRA):
+            wrong.add((name, target))
+    assert not wrong, sorted(wrong)
