@@ -29,7 +29,7 @@ class _Slow:
 def _prepare(tmp_path, seconds, cached):
     if cached:
         (tmp_path / "solver_0").mkdir(exist_ok=True)
-        (tmp_path / "solver_0" / "_kernels.advance-12.py311.nbi").write_bytes(b"")
+        (tmp_path / "solver_0" / "_loop.advance-12.py311.nbi").write_bytes(b"")
     out = io.StringIO()
     entry = _Slow(seconds)
     assert _jit.prepare(entry, 1.0, folder=tmp_path, stream=out)

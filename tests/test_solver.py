@@ -326,16 +326,16 @@ def test_steps_over_an_event_land_on_it():
 
 def _stopped_state(n, k, alpha, t_end):
     from chainrun.solver import _driver as D
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _loop, _state
 
     S = D._new_state(n, k, alpha, 1e-12, t_end, None)
     while True:
-        status = K.advance(S)
-        if status == K.ST_FLUSH:
-            S.ints[K.I_NEV] = 0
-        elif status == K.ST_GROW:
-            S = D._grow(S, int(S.ints[K.I_NEED]))
-        elif status != K.ST_YIELD:
+        status = _loop.advance(S)
+        if status == _state.ST_FLUSH:
+            S.ints[_state.I_NEV] = 0
+        elif status == _state.ST_GROW:
+            S = D._grow(S, int(S.ints[_state.I_NEED]))
+        elif status != _state.ST_YIELD:
             return S
 
 
@@ -345,28 +345,28 @@ def _stopped_state(n, k, alpha, t_end):
 def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
     """The event search builds the interpolant ball by ball, its extra stages on a band
     of three balls each way cut at the cluster's ends: the same numbers as the whole."""
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _state, _steppers
 
     S = _stopped_state(n, k, alpha, t_end)
-    m = int(S.ints[K.I_M])
-    assert m > 0 and S.ints[K.I_JUMP] == 0
-    S.ints[K.I_DSTAMP] += 1  # forget what the run built
+    m = int(S.ints[_state.I_M])
+    assert m > 0 and S.ints[_state.I_JUMP] == 0
+    S.ints[_state.I_DSTAMP] += 1  # forget what the run built
     for p in range(m):
-        twin(K._dense_at)(S, p)
+        twin(_steppers._dense_at)(S, p)
     by_ball = S.FX[:, :m].copy(), S.FV[:, :m].copy()
-    S.ints[K.I_DENSE] = 0
-    twin(K._dense)(S)
+    S.ints[_state.I_DENSE] = 0
+    twin(_steppers._dense)(S)
     np.testing.assert_array_equal(S.FX[:, :m], by_ball[0])
     np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
 
 
 def _window_rhs(S, alpha):
     """The equations of the window's clusters, written anew with numpy: y = (x, v)."""
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _state
 
-    m = int(S.ints[K.I_M])
+    m = int(S.ints[_state.I_M])
     spans = [(int(S.coff[c]), int(S.coff[c] + S.chi[c] - S.clo[c]))
-             for c in range(int(S.ints[K.I_NCL]))]
+             for c in range(int(S.ints[_state.I_NCL]))]
 
     def rhs(t, y):
         x, a = y[:m], np.zeros(m)
@@ -388,16 +388,16 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
     where scipy's DOP853 at its tightest tolerance does on the same clusters' equations."""
     from scipy.integrate import solve_ivp
 
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _loop, _state, _steppers
 
     S = _stopped_state(n, k, alpha, t_end)
-    m = int(S.ints[K.I_M])
-    assert m > 0 and S.ints[K.I_JUMP] == 0
-    twin(K._save_start)(S)
-    h = twin(K._taylor)(S)
+    m = int(S.ints[_state.I_M])
+    assert m > 0 and S.ints[_state.I_JUMP] == 0
+    twin(_loop._save_start)(S)
+    h = twin(_steppers._taylor)(S)
     assert 0.0 < h < np.inf
-    S.ints[K.I_TAY] = 1
-    assert twin(K._step)(S, h) <= 1.0
+    S.ints[_state.I_TAY] = 1
+    assert twin(_steppers._step)(S, h) <= 1.0
     y0 = np.concatenate([S.X0[:m], S.V0[:m]])
     sol = solve_ivp(_window_rhs(S, alpha), (0.0, h), y0, method="DOP853",
                     rtol=1e-13, atol=1e-15)
@@ -406,42 +406,42 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
     # and half-way, as the event search sees it
     half = solve_ivp(_window_rhs(S, alpha), (0.0, 0.5 * h), y0, method="DOP853",
                      rtol=1e-13, atol=1e-15).y[:, -1]
-    S.fs[K.F_HLAST] = h
+    S.fs[_state.F_HLAST] = h
     for p in range(m):
-        x, v = twin(K._taylor_at)(S, p, 0.5 * h)
+        x, v = twin(_steppers._taylor_at)(S, p, 0.5 * h)
         assert abs(x - half[p]) < 1e-11 and abs(v - half[m + p]) < 1e-11
 
 
 def test_bernstein_range_holds_the_polynomial():
     """The bounds the event search trusts to skip a contact contain the polynomial."""
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _compression, _state
 
     rng = np.random.default_rng(7)
-    order = np.arange(K.PT + 1)
-    scratch = np.zeros(K.PT + 1)
+    order = np.arange(_state.PT + 1)
+    scratch = np.zeros(_state.PT + 1)
     for _ in range(300):
-        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
+        T = rng.normal(size=_state.PT + 1) * rng.uniform(0.3, 3.0) ** -order
         h = rng.uniform(0.01, 1.5)
-        lo, hi = twin(K._bernstein_range)(T, h, scratch)
+        lo, hi = twin(_compression._bernstein_range)(T, h, scratch)
         p = np.polynomial.polynomial.polyval(np.linspace(0.0, h, 4001), T)
         assert lo <= p.min() and p.max() <= hi
     # a compression decaying over 2.75 e-foldings in the step is seen to stay positive
     decay = np.array([(-2.75) ** j / math.factorial(j) for j in order])
-    assert twin(K._bernstein_range)(decay, 1.0, scratch)[0] > 0.0
+    assert twin(_compression._bernstein_range)(decay, 1.0, scratch)[0] > 0.0
 
 
 def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
     """The scan skips an open contact that _stays_open clears: on random series, one
     so cleared never reaches its level, and never reaches 0 at the floor's rate."""
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _compression, _state
 
     rng = np.random.default_rng(11)
-    order = np.arange(K.PT + 1)
+    order = np.arange(_state.PT + 1)
     floor, level = 1e-12, 2e-10
-    D, B = np.zeros(K.PT + 1), np.zeros(K.N_SERIES_SAMPLES)
+    D, B = np.zeros(_state.PT + 1), np.zeros(_state.N_SERIES_SAMPLES)
 
     def stays_open(T, h):
-        if not twin(K._stays_open)(T, h, level, floor, D, B):
+        if not twin(_compression._stays_open)(T, h, level, floor, D, B):
             return False
         s = np.linspace(0.0, h, 4001)
         c = np.polynomial.polynomial.polyval(s, T)
@@ -452,13 +452,13 @@ def test_an_open_contact_said_to_stay_open_neither_closes_nor_engages():
 
     cleared = 0
     for _ in range(3000):
-        T = rng.normal(size=K.PT + 1) * rng.uniform(0.3, 3.0) ** -order
-        T *= 10.0 ** rng.uniform(-16.0, -8.0, size=K.PT + 1)
+        T = rng.normal(size=_state.PT + 1) * rng.uniform(0.3, 3.0) ** -order
+        T *= 10.0 ** rng.uniform(-16.0, -8.0, size=_state.PT + 1)
         cleared += stays_open(T, rng.uniform(0.01, 1.5))
     assert cleared > 100
     # the gap behind a Hertz wave (N = 20000 at t = 2000): touching within rounding,
     # parting far slower than the floor, pulled back by the cluster's first ball
-    gap = np.zeros(K.PT + 1)
+    gap = np.zeros(_state.PT + 1)
     gap[:4] = -4.4e-16, -5.4e-17, 1e-15, -2e-16
     assert stays_open(gap, 0.6)
     # the same gap a step after the release (N = 3000 at t = 1000): the terms of c' are
@@ -479,20 +479,20 @@ def test_window_bounds_hold_every_contacts_compression(n, k, alpha, t_end):
     (_series_bounds, on the work tiles) excludes its level: every lane's compression,
     evaluated by numpy from the positions' series, lies within its bound, and an
     opening contact is not excluded."""
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _generated, _loop, _state, _steppers
 
     S = _stopped_state(n, k, alpha, t_end)
-    m = int(S.ints[K.I_M])
-    twin(K._save_start)(S)
-    h = twin(K._taylor)(S)
+    m = int(S.ints[_state.I_M])
+    twin(_loop._save_start)(S)
+    h = twin(_steppers._taylor)(S)
     assert h > 0.0
     for step in (h, 0.3 * h, 2.0 * h):  # the event scan's step, shorter or longer
-        twin(K._series_bounds)(S.TW, m - 1, step)
+        twin(_generated._series_bounds)(S.TW, m - 1, step)
         s = np.linspace(0.0, step, 2001)
         for p in range(m - 1):
             c = np.polynomial.polynomial.polyval(s, S.TX[:, p] - S.TX[:, p + 1])
-            lo = S.TW[twin(K._tw)(p, K.LO_ROW)]
-            hi = S.TW[twin(K._tw)(p, K.HI_ROW)]
+            lo = S.TW[twin(_state._tw)(p, _state.LO_ROW)]
+            hi = S.TW[twin(_state._tw)(p, _state.HI_ROW)]
             scale = 1e-14 * np.abs(c).max()
             assert lo <= c.min() + scale and c.max() - scale <= hi
             if c.min() < -scale:
@@ -532,33 +532,33 @@ def test_gap_closing_within_the_time_resolution(alpha):
     closes sooner than that collide at the present instant, still a hair apart. The
     contact must stay closed (it used to open at once and close again, forever)."""
     from chainrun.solver import _driver as D
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _heap, _loop, _state
 
     t0, w, gap = 7159.550196, 0.3, 1e-13
     assert t0 + gap / w == t0  # the collision is at the present instant
     S = D._new_state(2, 1, alpha, 1e-12, None, None)
-    S.cst[0] = K.OPEN
-    S.ints[K.I_NCL] = 0
-    S.ints[K.I_DIRTY] = 0
-    S.fs[K.F_T] = t0
+    S.cst[0] = _state.OPEN
+    S.ints[_state.I_NCL] = 0
+    S.ints[_state.I_DIRTY] = 0
+    S.fs[_state.F_T] = t0
     S.bx[:] = (-gap, 0.0)
     S.bv[:] = (w, 0.0)
     S.bt[:] = t0
-    twin(K._schedule_pair)(S, 0)
+    twin(_heap._schedule_pair)(S, 0)
     statuses = []
     while len(statuses) < 1000:
-        statuses.append(K.advance(S))
-        if statuses[-1] == K.ST_FLUSH:
-            S.ints[K.I_NEV] = 0
-        elif statuses[-1] not in (K.ST_YIELD,):
+        statuses.append(_loop.advance(S))
+        if statuses[-1] == _state.ST_FLUSH:
+            S.ints[_state.I_NEV] = 0
+        elif statuses[-1] not in (_state.ST_YIELD,):
             break
-    assert statuses[-1] == K.ST_TERMINAL
-    assert int(S.ints[K.I_EVTOTAL]) == 2  # one closing, one opening
+    assert statuses[-1] == _state.ST_TERMINAL
+    assert int(S.ints[_state.I_EVTOTAL]) == 2  # one closing, one opening
     np.testing.assert_allclose(S.bv, [0.0, w], rtol=0, atol=1e-12)
 
 
 def test_generated_stages_are_current():
-    """The straight-line DOP853 stages in _kernels.py match scipy's tableau."""
+    """The straight-line DOP853 stages in _generated.py match scipy's tableau."""
     from chainrun.solver import _codegen
 
     assert _codegen.main(["--check"]) == 0
@@ -576,7 +576,7 @@ def test_the_kernels_cache_is_keyed_by_every_solver_source(tmp_path):
     copy = tmp_path / "solver"
     shutil.copytree(solver, copy, ignore=shutil.ignore_patterns("__pycache__"))
     names = sorted(p.name for p in copy.glob("*.py"))
-    assert {"_kernels.py", "_jit.py", "_driver.py"} <= set(names)
+    assert {"_loop.py", "_generated.py", "_jit.py", "_driver.py"} <= set(names)
     seen = {_jit.source_hash(copy)}
     assert seen == {_jit.source_hash(solver)}
     for name in names:
@@ -591,10 +591,10 @@ def test_the_kernels_cache_is_keyed_by_every_solver_source(tmp_path):
 
 def test_the_entry_points_are_cached_under_the_keyed_folder():
     from chainrun.solver import _jit
-    from chainrun.solver import _kernels as K
+    from chainrun.solver import _loop
 
     run(3, 1, 1.5)
     folder = _jit.cache_dir()
     assert folder.name == f"kernels-{_jit.source_hash()[:16]}"
-    for entry in (K.advance, K._snapshot):
+    for entry in (_loop.advance, _loop._snapshot):
         assert _jit._cached(entry, folder), entry

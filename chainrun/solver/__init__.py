@@ -1,9 +1,22 @@
 """The event-driven solver: the public types and the ``simulate`` driver.
 
 This package owns the dynamics and nothing else: it turns (N, K, alpha, output times,
-accuracy) into arrays and never touches files. The numba kernels live in
-``_kernels``; this module drives them between output times, maps their integer status
-codes to named outcomes, and hands snapshots to an observer hook.
+accuracy) into arrays and never touches files. ``_driver`` runs the numba kernels
+between output times, maps their integer status codes to named outcomes, and hands
+snapshots to an observer hook. The kernels, each module importing only those above it::
+
+    _jit          how kernels are compiled, cached and loaded
+    _state        the State arrays, their scalar slots, status codes, shared constants
+    _forces       the force law: contact forces, accelerations, contact energy
+    _generated    DOP853 stages and Taylor-series sums as straight-line code, written
+                  whole by ``_codegen`` (``python -m chainrun.solver._codegen``)
+    _steppers     one step (Taylor series or DOP853), positions inside the last step
+    _compression  one contact's compression over a step: its series, samples, bounds
+    _heap         predicted collisions of free balls
+    _projection   each cluster's internal energy, restored at changes of structure
+    _clusters     which balls move together, packed into the compact arrays
+    _events       locating the first contact event in a step
+    _loop         the step loop: ``advance`` and ``_snapshot``, the entry points
 
 Equations (paper units, every coefficient 1), for balls n = 1..N::
 
@@ -72,7 +85,7 @@ class Diagnostics:
 
     momentum_error is absolute (the initial momentum is K); energy_error is relative to
     the initial energy K/2. Each cluster's internal energy is projected back to its
-    conserved value at every change of structure (see ``_kernels._project_energy``);
+    conserved value at every change of structure (see ``_projection._project_energy``);
     energy_correction is the sum of those corrections relative to K/2, the honest
     measure of the integration error that the projection removes.
     """

@@ -1,6 +1,6 @@
 """Drives the kernels between output times: state set-up, the status loop, the result.
 
-The kernel (``_kernels.advance``) runs until it needs Python: a snapshot is ready, its
+The kernel (``_loop.advance``) runs until it needs Python: a snapshot is ready, its
 event log is full, its arrays must grow, a stretch of steps has passed (progress), or
 the run has ended. This module answers each of these and turns the final status into
 a named ``Outcome``.
@@ -20,31 +20,30 @@ from chainrun.solver import (
     Solution,
     velocity_floor,
 )
-from chainrun.solver import _jit
-from chainrun.solver import _kernels as K
+from chainrun.solver import _jit, _loop, _state
 from chainrun.solver.physics import kinetic_energy, momentum, potential_energy
 
 _EVENT_BUFFER = 1 << 16
 _INITIAL_WINDOW = 256
 
 _OUTCOMES = {
-    K.ST_TERMINAL: Outcome.TERMINAL,
-    K.ST_STOP_TIME: Outcome.STOP_TIME,
-    K.ST_EVENT_LIMIT: Outcome.EVENT_LIMIT,
-    K.ST_NON_FINITE: Outcome.NON_FINITE,
-    K.ST_STEP_UNDERFLOW: Outcome.STEP_UNDERFLOW,
+    _state.ST_TERMINAL: Outcome.TERMINAL,
+    _state.ST_STOP_TIME: Outcome.STOP_TIME,
+    _state.ST_EVENT_LIMIT: Outcome.EVENT_LIMIT,
+    _state.ST_NON_FINITE: Outcome.NON_FINITE,
+    _state.ST_STEP_UNDERFLOW: Outcome.STEP_UNDERFLOW,
 }
 
 
-def load_kernels(S: K.State | None = None) -> None:
+def load_kernels(S: _state.State | None = None) -> None:
     """Compile the kernels, or load them from the cache, for states like ``S``.
 
     A run calls this before its clock starts, so that its wall time is the solver's.
     """
     if S is None:
         S = _new_state(2, 1, 1.5, DEFAULT_RTOL, None, None)
-    _jit.prepare(K.advance, S)
-    _jit.prepare(K._snapshot, S, 0.0)
+    _jit.prepare(_loop.advance, S)
+    _jit.prepare(_loop._snapshot, S, 0.0)
 
 
 def release_compression(alpha: float, floor: float) -> float:
@@ -84,42 +83,43 @@ def _alloc_window(cap: int) -> dict:
         cb=np.zeros(cap, np.int64),
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
-        FS=np.zeros(cap), KV=np.zeros((K._NSE, cap)),
+        FS=np.zeros(cap), KV=np.zeros((_state._NSE, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
-        TX=np.zeros((K.PT + 1, cap)), TW=np.zeros(-(-cap // K.SERIES_TILE) * K.TILE_STRIDE),
+        TX=np.zeros((_state.PT + 1, cap)),
+        TW=np.zeros(-(-cap // _state.SERIES_TILE) * _state.TILE_STRIDE),
         TR=np.zeros(cap),
-        TD=np.zeros(K.PT + 1), TS=np.zeros((2, K.N_SERIES_SAMPLES)),
+        TD=np.zeros(_state.PT + 1), TS=np.zeros((2, _state.N_SERIES_SAMPLES)),
     )
 
 
-def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
+def _new_state(n, k, alpha, rtol, t_end, max_events) -> _state.State:
     ncont = max(n - 1, 1)
     floor = velocity_floor(rtol)
     bv = np.zeros(n)
     bv[:k] = 1.0
-    cst = np.full(ncont, K.DORMANT, np.int8)
-    fs = np.zeros(K.F_NFLOAT)
-    ints = np.zeros(K.I_NINT, np.int64)
+    cst = np.full(ncont, _state.DORMANT, np.int8)
+    fs = np.zeros(_state.F_NFLOAT)
+    ints = np.zeros(_state.I_NINT, np.int64)
     ccap = n // 2 + 2
     clo = np.zeros(ccap, np.int64)
     chi = np.zeros(ccap, np.int64)
     if k < n:
         # the last impacting ball meets the first ball at rest: the one live contact
-        cst[k - 1] = K.ACTIVE
+        cst[k - 1] = _state.ACTIVE
         clo[0], chi[0] = k - 1, k
-        ints[K.I_NCL] = 1
-        ints[K.I_DIRTY] = 1
-    fs[K.F_H] = 1e-3
-    fs[K.F_TEND] = math.inf if t_end is None else float(t_end)
-    fs[K.F_TOL] = rtol
-    fs[K.F_FLOOR] = floor
-    fs[K.F_EPSREL] = release_compression(alpha, floor)
-    fs[K.F_ALPHA] = alpha
-    fs[K.F_LDORM] = K.FORCE_DORMANT ** (1.0 / alpha)
-    fs[K.F_LLOCATE] = K.FORCE_LOCATE ** (1.0 / alpha)
-    ints[K.I_MODE] = 0 if alpha == 1.0 else (1 if alpha == 1.5 else 2)
-    ints[K.I_MAXEV] = -1 if max_events is None else int(max_events)
-    return K.State(
+        ints[_state.I_NCL] = 1
+        ints[_state.I_DIRTY] = 1
+    fs[_state.F_H] = 1e-3
+    fs[_state.F_TEND] = math.inf if t_end is None else float(t_end)
+    fs[_state.F_TOL] = rtol
+    fs[_state.F_FLOOR] = floor
+    fs[_state.F_EPSREL] = release_compression(alpha, floor)
+    fs[_state.F_ALPHA] = alpha
+    fs[_state.F_LDORM] = _state.FORCE_DORMANT ** (1.0 / alpha)
+    fs[_state.F_LLOCATE] = _state.FORCE_LOCATE ** (1.0 / alpha)
+    ints[_state.I_MODE] = 0 if alpha == 1.0 else (1 if alpha == 1.5 else 2)
+    ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
+    return _state.State(
         bx=np.zeros(n), bv=bv, bt=np.zeros(n),
         sep_t=np.full(n, np.nan), sep_v=np.full(n, np.nan),
         bmap=np.full(n, -1, np.int64),
@@ -135,11 +135,11 @@ def _new_state(n, k, alpha, rtol, t_end, max_events) -> K.State:
     )
 
 
-def _grow(S: K.State, need: int) -> K.State:
+def _grow(S: _state.State, need: int) -> _state.State:
     n = S.bx.shape[0]
     cap = min(n, max(need, 2 * S.X.shape[0]))
     window = _alloc_window(cap)
-    m = int(S.ints[K.I_M])
+    m = int(S.ints[_state.I_M])
     window["cb"][:m] = S.cb[:m]
     return S._replace(**window)
 
@@ -166,49 +166,50 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     ev_t, ev_j, ev_k = [], [], []
 
     def flush():
-        m = int(S.ints[K.I_NEV])
+        m = int(S.ints[_state.I_NEV])
         ev_t.append(S.ev_t[:m].copy())
         ev_j.append(S.ev_j[:m].copy())
         ev_k.append(S.ev_k[:m].copy())
-        S.ints[K.I_NEV] = 0
+        S.ints[_state.I_NEV] = 0
 
     nout = 0
     if nt:
-        S.fs[K.F_TOUT] = times[0]
-        S.ints[K.I_HAVEOUT] = 1
+        S.fs[_state.F_TOUT] = times[0]
+        S.ints[_state.I_HAVEOUT] = 1
     while True:
-        status = K.advance(S)
-        if status == K.ST_OUTPUT:
+        status = _loop.advance(S)
+        if status == _state.ST_OUTPUT:
             emit(nout, times[nout])
             nout += 1
             if nout < nt:
-                S.fs[K.F_TOUT] = times[nout]
-                S.ints[K.I_HAVEOUT] = 1
+                S.fs[_state.F_TOUT] = times[nout]
+                S.ints[_state.I_HAVEOUT] = 1
             if on_progress is not None:
-                on_progress(float(S.fs[K.F_T]))
-        elif status == K.ST_FLUSH:
+                on_progress(float(S.fs[_state.F_T]))
+        elif status == _state.ST_FLUSH:
             flush()
-        elif status == K.ST_GROW:
-            need = int(S.ints[K.I_NEED])
+        elif status == _state.ST_GROW:
+            need = int(S.ints[_state.I_NEED])
             if need <= 0:
                 raise RuntimeError(
-                    f"internal error: contact states did not settle at t = {S.fs[K.F_T]!r} "
+                    f"internal error: contact states did not settle at "
+                    f"t = {S.fs[_state.F_T]!r} "
                     f"({_window_text(S)}); please report this with the config")
             S = _grow(S, need)
-        elif status == K.ST_YIELD:
+        elif status == _state.ST_YIELD:
             if on_progress is not None:
-                on_progress(float(S.fs[K.F_T]))
+                on_progress(float(S.fs[_state.F_T]))
         else:
             break
     flush()
     outcome = _OUTCOMES[status]
-    t_final = float(S.fs[K.F_T])
+    t_final = float(S.fs[_state.F_T])
     # snapshots after the terminal state are free flight; the kernel evaluates them
-    while status == K.ST_TERMINAL and nout < nt:
-        K._snapshot(S, times[nout])
+    while status == _state.ST_TERMINAL and nout < nt:
+        _loop._snapshot(S, times[nout])
         emit(nout, times[nout])
         nout += 1
-    K._snapshot(S, t_final)
+    _loop._snapshot(S, t_final)
     x_final = S.ox.copy()
     v_final = S.ov.copy()
     wall = time.perf_counter() - wall0
@@ -217,16 +218,16 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     e0 = 0.5 * k
     e1 = float(kinetic_energy(v_final) + potential_energy(x_final, alpha))
     event_time = np.concatenate(ev_t)
-    message = _message(outcome, t_final, int(S.ints[K.I_EVTOTAL]), S)
+    message = _message(outcome, t_final, int(S.ints[_state.I_EVTOTAL]), S)
     diagnostics = Diagnostics(
-        steps=int(S.ints[K.I_STEPS]),
-        rejected_steps=int(S.ints[K.I_REJ]),
+        steps=int(S.ints[_state.I_STEPS]),
+        rejected_steps=int(S.ints[_state.I_REJ]),
         events=int(event_time.size),
         momentum_error=p_err,
         energy_error=abs(e1 - e0) / e0,
-        energy_correction=float(S.fs[K.F_EPROJ]) / e0,
+        energy_correction=float(S.fs[_state.F_EPROJ]) / e0,
         wall_time=wall,
-        max_window=int(S.ints[K.I_MAXWIN]),
+        max_window=int(S.ints[_state.I_MAXWIN]),
         rtol=float(rtol),
         velocity_floor=velocity_floor(rtol),
     )
@@ -242,7 +243,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     )
 
 
-def _message(outcome: Outcome, t: float, events: int, S: K.State) -> str:
+def _message(outcome: Outcome, t: float, events: int, S: _state.State) -> str:
     if outcome is Outcome.TERMINAL:
         return f"terminal state reached at t = {t:.6g} after {events} events"
     if outcome is Outcome.STOP_TIME:
@@ -255,8 +256,8 @@ def _message(outcome: Outcome, t: float, events: int, S: K.State) -> str:
     return f"step size underflow at t = {t:.6g}, {where}"
 
 
-def _window_text(S: K.State) -> str:
-    ncl = int(S.ints[K.I_NCL])
+def _window_text(S: _state.State) -> str:
+    ncl = int(S.ints[_state.I_NCL])
     if ncl == 0:
         return "no ball in contact"
     parts = [f"balls {S.clo[c] + 1}-{S.chi[c] + 1}" for c in range(min(ncl, 3))]

@@ -1,0 +1,174 @@
+"""Cluster bookkeeping: which balls move together, and their compact arrays.
+
+The clusters are a small list sorted by their first ball (``clo``, ``chi``). A
+contact that becomes active joins the clusters or balls on its two sides
+(``_activate``); one that becomes inactive splits its cluster and frees the balls
+left alone (``_deactivate``). After any change ``_rebuild`` packs the clusters' balls
+into the compact arrays that the steppers integrate, and schedules the freed balls'
+collisions with their free neighbours (``_heap``).
+"""
+
+from __future__ import annotations
+
+from chainrun.solver._forces import _rhs
+from chainrun.solver._heap import _schedule_pair
+from chainrun.solver._jit import kernel
+from chainrun.solver._projection import _cluster_energy, _project_energy
+from chainrun.solver._state import (
+    F_T, I_DENSE, I_DIRTY, I_DSTAMP, I_M, I_MAXWIN, I_NCL, I_NFREED, OPEN, _find_cluster,
+)
+
+
+@kernel
+def _sync(S):
+    """Write the compact state back to the balls (all at the current time).
+
+    Called before every change of structure, so each cluster's energy is projected
+    back to its value at the last change first.
+    """
+    _project_energy(S)
+    t = S.fs[F_T]
+    for p in range(S.ints[I_M]):
+        b = S.cb[p]
+        S.bx[b] = S.X[p]
+        S.bv[b] = S.V[p]
+        S.bt[b] = t
+
+
+@kernel
+def _remove_cluster(S, c):
+    n = S.ints[I_NCL]
+    for i in range(c, n - 1):
+        S.clo[i] = S.clo[i + 1]
+        S.chi[i] = S.chi[i + 1]
+    S.ints[I_NCL] = n - 1
+
+
+@kernel
+def _insert_cluster(S, lo, hi):
+    n = S.ints[I_NCL]
+    if n >= S.clo.shape[0]:
+        return False
+    i = n
+    while i > 0 and S.clo[i - 1] > lo:
+        S.clo[i] = S.clo[i - 1]
+        S.chi[i] = S.chi[i - 1]
+        i -= 1
+    S.clo[i] = lo
+    S.chi[i] = hi
+    S.ints[I_NCL] = n + 1
+    return True
+
+
+@kernel(inline="always")
+def _touch_ball(S, b):
+    """Invalidate predictions involving ball b."""
+    if b - 1 >= 0:
+        S.stamp[b - 1] += 1
+    if b < S.stamp.shape[0]:
+        S.stamp[b] += 1
+
+
+@kernel
+def _free_ball(S, b):
+    S.sep_t[b] = S.fs[F_T]
+    S.sep_v[b] = S.bv[b]
+    S.bmap[b] = -1
+    _touch_ball(S, b)
+    n = S.ints[I_NFREED]
+    if n < S.freed.shape[0]:
+        S.freed[n] = b
+        S.ints[I_NFREED] = n + 1
+
+
+@kernel
+def _activate(S, j, state):
+    """Make contact j active, joining the clusters/balls on both sides."""
+    S.cst[j] = state
+    cl = _find_cluster(S, j)
+    cr = _find_cluster(S, j + 1)
+    lo = j
+    hi = j + 1
+    if cl >= 0:
+        lo = S.clo[cl]
+    else:
+        _touch_ball(S, j)
+    if cr >= 0:
+        hi = S.chi[cr]
+        _remove_cluster(S, cr)
+    else:
+        _touch_ball(S, j + 1)
+    if cl >= 0:
+        _remove_cluster(S, cl)
+    ok = _insert_cluster(S, lo, hi)
+    S.ints[I_DIRTY] = 1
+    return ok
+
+
+@kernel
+def _deactivate(S, j, level):
+    """Make contact j inactive (engages again beyond ``level``), splitting its cluster."""
+    S.cst[j] = OPEN
+    S.lvl[j] = level
+    c = _find_cluster(S, j)
+    if c < 0:
+        return True
+    lo = S.clo[c]
+    hi = S.chi[c]
+    _remove_cluster(S, c)
+    ok = True
+    if j > lo:
+        ok = ok and _insert_cluster(S, lo, j)
+    else:
+        _free_ball(S, j)
+    if j + 1 < hi:
+        ok = ok and _insert_cluster(S, j + 1, hi)
+    else:
+        _free_ball(S, j + 1)
+    S.ints[I_DIRTY] = 1
+    return ok
+
+
+@kernel
+def _rebuild(S):
+    """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
+    ncl = S.ints[I_NCL]
+    m = 0
+    for c in range(ncl):
+        m += S.chi[c] - S.clo[c] + 1
+    if m > S.X.shape[0]:
+        return m
+    for p in range(S.ints[I_M]):
+        S.bmap[S.cb[p]] = -1
+    t = S.fs[F_T]
+    p = 0
+    for c in range(ncl):
+        S.coff[c] = p
+        for b in range(S.clo[c], S.chi[c] + 1):
+            S.cb[p] = b
+            S.X[p] = S.bx[b] + S.bv[b] * (t - S.bt[b])
+            S.V[p] = S.bv[b]
+            S.bmap[b] = p
+            p += 1
+    S.ints[I_M] = m
+    if m > S.ints[I_MAXWIN]:
+        S.ints[I_MAXWIN] = m
+    # contact lanes: 1 inside a cluster, 0 from a cluster's last ball to the next's first
+    for p in range(m):
+        S.TR[p] = 0.0
+    for c in range(ncl):
+        for p in range(S.coff[c], S.coff[c] + S.chi[c] - S.clo[c]):
+            S.TR[p] = 1.0
+    for c in range(ncl):
+        S.cen[c] = _cluster_energy(S, c)
+    _rhs(S, S.X, S.A)
+    S.ints[I_DIRTY] = 0
+    S.ints[I_DENSE] = 0
+    S.ints[I_DSTAMP] += 1
+    # balls that just lost their last contact may be on course to hit a free neighbour
+    for i in range(S.ints[I_NFREED]):
+        b = S.freed[i]
+        _schedule_pair(S, b - 1)
+        _schedule_pair(S, b)
+    S.ints[I_NFREED] = 0
+    return 0

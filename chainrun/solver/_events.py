@@ -1,0 +1,312 @@
+"""Event location: the first contact in the last step to open, close, engage or release.
+
+Events are located on the dense output by sampling each candidate contact at several
+points of the step (an opening can re-close within one step) and bracketing the first
+crossing (``_contact_event``, ``_crossing``); the step loop then redoes the step from
+its start to end exactly at the root, refined by Newton on the step itself, so no
+accepted step ever crosses a non-smooth point. On a series step a contact is a
+candidate only if its level lies within the Bernstein bounds of its compression's
+series over the step (``_compression``, ``_generated._series_bounds``). ``_log``
+writes the events into the state's event log.
+
+References
+----------
+E. Hairer, S. P. Norsett, G. Wanner, Solving Ordinary Differential Equations I,
+Sec. II.6 (dense output and event location).
+"""
+
+from __future__ import annotations
+
+from chainrun.solver._compression import (
+    _bernstein_range, _contact_series, _curvature_bound, _sample_series, _series_at,
+    _stays_open,
+)
+from chainrun.solver._generated import _series_bounds
+from chainrun.solver._jit import kernel
+from chainrun.solver._state import (
+    ACTIVE, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH, F_EPSREL,
+    F_FLOOR, F_HLAST, F_LDORM, F_LLOCATE, F_TPREV, HI_ROW, I_EVTOTAL, I_M, I_NCL, I_NEV,
+    I_TAY, LO_ROW, N_SAMPLES, N_SERIES_SAMPLES, OPEN, _tw,
+)
+from chainrun.solver._steppers import _ball_at
+
+
+@kernel(inline="always")
+def _log(S, t, j, kind):
+    n = S.ints[I_NEV]
+    S.ev_t[n] = t
+    S.ev_j[n] = j
+    S.ev_k[n] = kind
+    S.ints[I_NEV] = n + 1
+    S.ints[I_EVTOTAL] += 1
+
+
+@kernel
+def _contact_at(S, j, th):
+    """(compression, its rate, |x_l| + |x_r|) of contact j at t_prev + th * h_last."""
+    xl, vl = _ball_at(S, j, th)
+    xr, vr = _ball_at(S, j + 1, th)
+    return xl - xr, vl - vr, abs(xl) + abs(xr)
+
+
+@kernel(inline="always")
+def _ball_end(S, b, th):
+    """(x, v) of ball b at the start (th = 0) or the end (th = 1) of the last step."""
+    p = S.bmap[b]
+    if p >= 0:
+        if th >= 1.0:
+            return S.X[p], S.V[p]
+        return S.X0[p], S.V0[p]
+    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+
+
+@kernel(inline="always")
+def _contact_end(S, j, th):
+    """_contact_at at th = 0 or 1, where no interpolant is needed (inlined)."""
+    xl, vl = _ball_end(S, j, th)
+    xr, vr = _ball_end(S, j + 1, th)
+    return xl - xr, vl - vr, abs(xl) + abs(xr)
+
+
+@kernel
+def _crossing(S, j, ta, tb, ca, cb_, level):
+    """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi."""
+    fa = ca - level
+    fb = cb_ - level
+    side = 0
+    for _ in range(100):
+        if tb - ta <= 4.0 * EPS * max(1.0, tb):
+            break
+        tm = tb - fb * (tb - ta) / (fb - fa) if fb != fa else 0.5 * (ta + tb)
+        if not (tm > ta and tm < tb):
+            tm = 0.5 * (ta + tb)
+        cm, _w, _s = _contact_at(S, j, tm)
+        fm = cm - level
+        if fm == 0.0:
+            return tm
+        if (fm > 0.0) == (fa > 0.0):
+            ta = tm
+            fa = fm
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            tb = tm
+            fb = fm
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    # the side past the level, so the event is not missed by a hair
+    return tb
+
+
+@kernel(inline="always")
+def _rounding(scale):
+    return 16.0 * EPS * max(1.0, scale)
+
+
+@kernel(inline="always")
+def _may_cross(c0, c1, reach, level):
+    return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
+
+
+@kernel
+def _contact_event(S, j, hcap):
+    """Earliest event of contact j in the last step before ``hcap``.
+
+    Returns (theta, kind, level), theta = 2 when there is none. The kind says what
+    crossing was found; the caller sets the contact's new state from it.
+    """
+    st = S.cst[j]
+    tay = S.ints[I_TAY] == 1
+    if st == FRESH and not tay:
+        # never pressed beyond eps_rel: its force is below the floor, so it is checked
+        # at the step's end (_release_quiet), like a dormant contact
+        return 2.0, 0, 0.0
+    c0, w0, s0 = _contact_end(S, j, 0.0)
+    c1, w1, s1 = _contact_end(S, j, 1.0)
+    h = S.fs[F_HLAST]
+    if st == FRESH:
+        # a series step is long enough for a fresh contact to be pressed beyond
+        # eps_rel and to open again inside it: that opening is located
+        lev1 = S.fs[F_EPSREL]
+        lev2 = lev1
+    elif st == ACTIVE:
+        lev1 = 0.0
+        lev2 = 0.0
+    elif st == DORMANT:
+        # a dormant contact pressed slowly engages at the step's end (_post_step): its
+        # force below FORCE_LOCATE is far under rounding; only a fast press is located
+        if c1 < S.fs[F_LLOCATE]:
+            return 2.0, 0, 0.0
+        lev1 = S.fs[F_LDORM]
+        lev2 = -S.fs[F_EPSREL]
+    else:
+        lev1 = 0.0
+        lev2 = S.lvl[j]
+    if tay:
+        # the series of c over the step lies within the hull of its Bernstein
+        # coefficients: a level outside it is not reached (a lane inside a cluster has
+        # them from the scan, _series_bounds)
+        _contact_series(S, j)
+        pa = S.bmap[j]
+        if pa >= 0 and S.bmap[j + 1] == pa + 1 and S.TR[pa] != 0.0:
+            blo = S.TW[_tw(pa, LO_ROW)]
+            bhi = S.TW[_tw(pa, HI_ROW)]
+        else:
+            blo, bhi = _bernstein_range(S.TD, h, S.TS[0])
+        if not (blo <= lev1 <= bhi or blo <= lev2 <= bhi):
+            return 2.0, 0, 0.0
+    else:
+        # how far c can stray from its end values inside the step: h^2/8 max|c''|,
+        # with c'' taken at both ends and a safety factor of 2
+        reach = 0.25 * h * h * _curvature_bound(S, j)
+        if not (_may_cross(c0, c1, reach, lev1) or _may_cross(c0, c1, reach, lev2)):
+            return 2.0, 0, 0.0
+    floor = S.fs[F_FLOOR]
+    # a series step is several DOP853 steps long: sample it as finely, on the series
+    # of c itself (TD)
+    ns = N_SERIES_SAMPLES if tay else N_SAMPLES
+    if tay:
+        _sample_series(S, ns, h)
+        # each crossing below needs a sample on the level's far side: when none is,
+        # the scan would find nothing (its common outcome), so skip it
+        smin = min(c0, c1)
+        smax = max(c0, c1)
+        for i in range(ns):
+            smin = min(smin, S.TS[1, i])
+            smax = max(smax, S.TS[1, i])
+        if st == ACTIVE:
+            clear = smin > lev1
+        elif st == FRESH:
+            clear = smin > 0.0
+        elif st == DORMANT:
+            clear = smax < lev1 and smin > lev2
+        else:
+            clear = smax < 0.0 and smax < lev2
+        if clear:
+            return 2.0, 0, 0.0
+    pressed = c0 > lev1  # (a fresh contact's press beyond eps_rel)
+    ta = 0.0
+    ca = c0
+    for i in range(1, ns + 1):
+        tb = i / ns
+        if tb >= hcap:
+            tb = hcap
+        if tb >= 1.0:
+            cb_ = c1
+        elif tay:
+            cb_ = S.TS[1, i - 1] if tb == i / ns else _series_at(S.TD, tb * h)
+        else:
+            cb_ = _contact_at(S, j, tb)[0]
+        if st == ACTIVE:
+            if ca > lev1 and cb_ <= lev1:
+                return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_OPEN, lev1
+        elif st == FRESH:
+            if pressed and ca > 0.0 and cb_ <= 0.0:
+                return _crossing(S, j, ta, tb, ca, cb_, 0.0), EV_OPEN, 0.0
+            pressed = pressed or cb_ > lev1
+        elif st == DORMANT:
+            if ca < lev1 and cb_ >= lev1:
+                return _crossing(S, j, ta, tb, ca, cb_, lev1), EV_ENGAGE, lev1
+            if ca > lev2 and cb_ <= lev2:
+                return _crossing(S, j, ta, tb, ca, cb_, lev2), EV_RELEASE, lev2
+        else:
+            if ca < 0.0 and cb_ >= 0.0:
+                tr = _crossing(S, j, ta, tb, ca, cb_, 0.0)
+                if _contact_at(S, j, tr)[1] >= floor:
+                    return tr, EV_CLOSE, 0.0
+            if ca < lev2 and cb_ >= lev2:
+                return _crossing(S, j, ta, tb, ca, cb_, lev2), EV_ENGAGE, lev2
+        ta = tb
+        ca = cb_
+        if tb >= hcap:
+            break
+    return 2.0, 0, 0.0
+
+
+@kernel(inline="always")
+def _stays_positive(c0, c1, w0, w1, g0, g1, h):
+    """Whether c > 0 throughout a step where c'' keeps one sign (both ends agree within 10x).
+
+    Concave: the minimum is at an end. Convex: c lies above both end tangents, whose
+    upper envelope has its minimum at their intersection.
+    """
+    if c0 <= 0.0 or c1 <= 0.0:
+        return False
+    if g0 < 0.0 and g1 < 0.0 and 10.0 * g0 <= g1 and 10.0 * g1 <= g0:
+        return True
+    if g0 > 0.0 and g1 > 0.0 and 10.0 * g0 >= g1 and 10.0 * g1 >= g0:
+        if w0 >= 0.0 or w1 <= 0.0:
+            return True  # monotone over the step: the smaller end is the minimum
+        # tangents c0 + w0 h s and c1 - w1 h (1 - s) meet at s*
+        sst = (c1 - w1 * h - c0) / (h * (w0 - w1))
+        return c0 + w0 * h * sst > 0.0
+    return False
+
+
+@kernel
+def _find_event(S):
+    """Scan the contacts touching clusters for the earliest event of the last step."""
+    best = 2.0
+    bj = -1
+    bk = 0
+    blev = 0.0
+    ncont = S.cst.shape[0]
+    h = S.fs[F_HLAST]
+    q = 0.25 * h * h
+    tay = S.ints[I_TAY] == 1
+    W = S.TW
+    if tay:
+        _series_bounds(W, S.ints[I_M] - 1, h)
+    epsrel = S.fs[F_EPSREL]
+    X, X0, A, A0 = S.X, S.X0, S.A, S.A0
+    for c in range(S.ints[I_NCL]):
+        lo = S.clo[c]
+        o = S.coff[c] - lo
+        for j in range(max(lo - 1, 0), min(S.chi[c], ncont - 1) + 1):
+            # a boundary shared by two clusters is seen twice: skip the second
+            if j == lo - 1 and c > 0 and S.chi[c - 1] == j:
+                continue
+            st = S.cst[j]
+            if j >= lo and j < S.chi[c]:
+                # a contact inside the cluster, active or fresh (never pressed beyond
+                # eps_rel): can it open in this step?
+                p = o + j
+                if tay:
+                    if W[_tw(p, LO_ROW)] > 0.0 or (st == FRESH and W[_tw(p, HI_ROW)] < epsrel):
+                        continue
+                elif st == FRESH:
+                    continue  # checked at the step's end (_release_quiet)
+                else:
+                    c0 = X0[p] - X0[p + 1]
+                    c1 = X[p] - X[p + 1]
+                    g0 = A0[p] - A0[p + 1]
+                    g1 = A[p] - A[p + 1]
+                    if min(c0, c1) > q * max(abs(g0), abs(g1)):
+                        continue
+                    if _stays_positive(c0, c1, S.V0[p] - S.V0[p + 1],
+                                       S.V[p] - S.V[p + 1], g0, g1, h):
+                        continue
+            else:
+                # quick rejections at a cluster's edge; the general path repeats them
+                cq0 = _contact_end(S, j, 0.0)[0]
+                cq1 = _contact_end(S, j, 1.0)[0]
+                if st == DORMANT:
+                    if cq1 < S.fs[F_LLOCATE]:
+                        continue
+                elif st == OPEN:
+                    if tay:
+                        _contact_series(S, j)
+                        if _stays_open(S.TD, h, S.lvl[j], S.fs[F_FLOOR], S.TS[1], S.TS[0]):
+                            continue
+                    elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
+                        continue  # stays open: below both of its levels (0 and lvl > 0)
+            th, kind, lev = _contact_event(S, j, best)
+            if th < best:
+                best = th
+                bj = j
+                bk = kind
+                blev = lev
+    return best, bj, bk, blev

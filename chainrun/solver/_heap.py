@@ -1,0 +1,118 @@
+"""The heap of predicted collisions between free balls.
+
+Free pairs approaching at >= floor are predicted analytically (``_schedule_pair``)
+and kept in a binary heap ordered by time. An entry is invalidated lazily: it carries
+its contact's stamp, and any change to either ball bumps the stamp
+(``_clusters._touch_ball``), so a stale entry is dropped when it reaches the top.
+"""
+
+from __future__ import annotations
+
+from chainrun.solver._jit import kernel
+from chainrun.solver._state import F_FLOOR, F_T, I_NHEAP, _find_cluster
+
+
+@kernel
+def _heap_push(S, t, j):
+    n = S.ints[I_NHEAP]
+    if n >= S.hp_t.shape[0]:
+        _heap_compact(S)
+        n = S.ints[I_NHEAP]
+        if n >= S.hp_t.shape[0]:
+            return
+    i = n
+    S.hp_t[i] = t
+    S.hp_j[i] = j
+    S.hp_s[i] = S.stamp[j]
+    S.ints[I_NHEAP] = n + 1
+    while i > 0:
+        q = (i - 1) // 2
+        if S.hp_t[q] <= S.hp_t[i]:
+            break
+        _heap_swap(S, i, q)
+        i = q
+
+
+@kernel(inline="always")
+def _heap_swap(S, a, b):
+    S.hp_t[a], S.hp_t[b] = S.hp_t[b], S.hp_t[a]
+    S.hp_j[a], S.hp_j[b] = S.hp_j[b], S.hp_j[a]
+    S.hp_s[a], S.hp_s[b] = S.hp_s[b], S.hp_s[a]
+
+
+@kernel
+def _heap_pop(S):
+    n = S.ints[I_NHEAP] - 1
+    S.ints[I_NHEAP] = n
+    if n == 0:
+        return
+    _heap_swap(S, 0, n)
+    i = 0
+    while True:
+        l = 2 * i + 1
+        if l >= n:
+            break
+        r = l + 1
+        c = l
+        if r < n and S.hp_t[r] < S.hp_t[l]:
+            c = r
+        if S.hp_t[i] <= S.hp_t[c]:
+            break
+        _heap_swap(S, i, c)
+        i = c
+
+
+@kernel
+def _heap_valid_top(S):
+    """Drop stale entries; return whether a valid entry is on top."""
+    while S.ints[I_NHEAP] > 0:
+        j = S.hp_j[0]
+        if S.hp_s[0] == S.stamp[j]:
+            return True
+        _heap_pop(S)
+    return False
+
+
+@kernel
+def _heap_compact(S):
+    n = S.ints[I_NHEAP]
+    k = 0
+    for i in range(n):
+        j = S.hp_j[i]
+        if S.hp_s[i] == S.stamp[j]:
+            S.hp_t[k] = S.hp_t[i]
+            S.hp_j[k] = j
+            S.hp_s[k] = S.hp_s[i]
+            k += 1
+    S.ints[I_NHEAP] = k
+    # re-heapify
+    for i in range(k // 2 - 1, -1, -1):
+        q = i
+        while True:
+            l = 2 * q + 1
+            if l >= k:
+                break
+            r = l + 1
+            c = l
+            if r < k and S.hp_t[r] < S.hp_t[l]:
+                c = r
+            if S.hp_t[q] <= S.hp_t[c]:
+                break
+            _heap_swap(S, q, c)
+            q = c
+
+
+@kernel
+def _schedule_pair(S, j):
+    """Predict the collision of free balls j, j+1 if they approach at >= floor."""
+    if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
+        return
+    if _find_cluster(S, j) >= 0 or _find_cluster(S, j + 1) >= 0:
+        return
+    w = S.bv[j] - S.bv[j + 1]
+    if not (w >= S.fs[F_FLOOR]):
+        return
+    t = S.fs[F_T]
+    c = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
+    tc = t - c / w if c < 0.0 else t
+    _heap_push(S, tc, j)

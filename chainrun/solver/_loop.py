@@ -1,0 +1,451 @@
+"""The step loop: ``advance``, which runs the solver, and ``_snapshot``.
+
+The kernels own the numerics and nothing else: they never see files or Python
+objects, and report through integer status codes (``_state.ST_*``) that ``_driver``
+maps to named outcomes. ``advance`` and ``_snapshot`` are the two entry points that
+Python calls (cached, see ``_jit``); everything else is a ``kernel`` linked into them.
+
+One pass of the loop rebuilds the compact arrays after a change of structure
+(``_clusters``), takes snapshots due inside the last step, applies the event or
+releases that the last step ended on (``_post_step``, ``_settle``), jumps over free
+flight to the next predicted collision (``_heap``), or takes one accepted step
+(``_steppers``) that ends on the earliest event found in it (``_events``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from chainrun.solver._clusters import _activate, _deactivate, _rebuild, _sync
+from chainrun.solver._compression import _pressed_in_step
+from chainrun.solver._events import _find_event, _log, _rounding
+from chainrun.solver._heap import _heap_pop, _heap_valid_top
+from chainrun.solver._jit import entry, kernel
+from chainrun.solver._state import (
+    ACTIVE, AFTER_EVENT, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH,
+    F_ALPHA, F_EPSREL, F_FLOOR, F_H, F_HLAST, F_LDORM, F_T, F_TEND, F_TOUT, F_TPREV,
+    F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_HAVEOUT, I_JUMP, I_M, I_MAXEV,
+    I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, PT, SERIES_CLUSTERS,
+    ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
+    ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _tw,
+)
+from chainrun.solver._steppers import _ball_now, _dense, _poly, _step, _taylor, _taylor_at
+
+
+@kernel
+def _save_start(S):
+    for p in range(S.ints[I_M]):
+        S.X0[p] = S.X[p]
+        S.V0[p] = S.V[p]
+        S.A0[p] = S.A[p]
+
+
+@kernel
+def _restore_start(S):
+    for p in range(S.ints[I_M]):
+        S.X[p] = S.X0[p]
+        S.V[p] = S.V0[p]
+        S.A[p] = S.A0[p]
+
+
+@entry
+def _snapshot(S, tout):
+    """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
+    t = S.fs[F_T]
+    tp = S.fs[F_TPREV]
+    hl = S.fs[F_HLAST]
+    th = 1.0
+    if tout < t and S.ints[I_JUMP] == 0 and hl > 0.0:
+        th = (tout - tp) / hl
+        if th < 0.0:
+            th = 0.0
+        if S.ints[I_TAY] == 0:
+            _dense(S)
+    for b in range(S.bx.shape[0]):
+        p = S.bmap[b]
+        if p >= 0:
+            if th >= 1.0:
+                S.ox[b] = S.X[p]
+                S.ov[b] = S.V[p]
+            elif S.ints[I_TAY] == 1:
+                S.ox[b], S.ov[b] = _taylor_at(S, p, th * hl)
+            else:
+                S.ox[b] = _poly(S.FX, S.X0[p], p, th)
+                S.ov[b] = _poly(S.FV, S.V0[p], p, th)
+        else:
+            S.ox[b] = S.bx[b] + S.bv[b] * (tout - S.bt[b])
+            S.ov[b] = S.bv[b]
+
+
+@kernel
+def _engage_level(S, j):
+    """Compression beyond which contact j, made inactive now, engages again.
+
+    Its present compression plus eps_rel, and never within rounding of it (at tiny
+    rtol eps_rel is below the rounding of the positions, and a level inside the
+    rounding would flip the contact back and forth).
+    """
+    t = S.fs[F_T]
+    xl = S.bx[j] + S.bv[j] * (t - S.bt[j])
+    xr = S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1])
+    return max(xl - xr, 0.0) + max(S.fs[F_EPSREL], 4.0 * _rounding(abs(xl) + abs(xr)))
+
+
+@kernel
+def _apply_event(S, j, kind):
+    """Set contact j's state from the event just reached (positions are synced)."""
+    t = S.fs[F_T]
+    if kind == EV_OPEN or kind == EV_RELEASE:
+        ok = _deactivate(S, j, _engage_level(S, j))
+        _log(S, t, j, kind)
+    elif kind == EV_CLOSE:
+        ok = _activate(S, j, ACTIVE)
+        _log(S, t, j, EV_CLOSE)
+    else:
+        dormant = S.cst[j] == DORMANT
+        ok = _activate(S, j, FRESH if dormant else ACTIVE)
+        if not dormant:  # a dormant contact was closed already: nothing to log
+            _log(S, t, j, EV_ENGAGE)
+    return ok
+
+
+@kernel
+def _season(S):
+    """Season the fresh contacts pressed beyond eps_rel in the last step (made ACTIVE).
+
+    After every accepted step, whatever else it brings: a wave presses a fresh contact
+    and passes on within a few steps, each of which may end on an event or an
+    engagement at the front.
+    """
+    epsrel = S.fs[F_EPSREL]
+    tay = S.ints[I_TAY] == 1 and S.ints[I_JUMP] == 0
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        lo = S.clo[c]
+        for j in range(lo, S.chi[c]):
+            if S.cst[j] == FRESH:
+                p = o + j - lo
+                if S.X[p] - S.X[p + 1] > epsrel:
+                    S.cst[j] = ACTIVE
+                elif tay and S.TW[_tw(p, HI_ROW)] > epsrel and _pressed_in_step(S, j):
+                    # pressed beyond eps_rel inside the step (a candidate only if its
+                    # bound over the step, from the event scan, reaches eps_rel)
+                    S.cst[j] = ACTIVE
+
+
+@kernel
+def _release_quiet(S):
+    """Release the contacts below the floor.
+
+    A seasoned contact is released when its relative motion and stored energy could
+    not produce a speed above the floor (w^2 + 4 c^(alpha+1)/(alpha+1) < floor^2) and
+    its neighbours do not load it (|c''| < floor). A fresh contact (at the front of a
+    wave, never pressed beyond eps_rel) is released only when pulled apart beyond
+    the rounding of its positions; it carried no force above the floor.
+    """
+    floor = S.fs[F_FLOOR]
+    epsrel = S.fs[F_EPSREL]
+    alpha = S.fs[F_ALPHA]
+    nrel = 0
+    for c in range(S.ints[I_NCL]):
+        o = S.coff[c]
+        lo = S.clo[c]
+        for j in range(lo, S.chi[c]):
+            p = o + j - lo
+            st = S.cst[j]
+            cj = S.X[p] - S.X[p + 1]
+            if st == FRESH:
+                if cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
+                    S.jbuf[nrel] = j
+                    nrel += 1
+            elif st == ACTIVE and cj < epsrel:
+                w = S.V[p] - S.V[p + 1]
+                if abs(w) >= floor or abs(S.A[p] - S.A[p + 1]) >= floor:
+                    continue
+                cp = cj if cj > 0.0 else 0.0
+                if w * w + 4.0 * cp ** (alpha + 1.0) / (alpha + 1.0) < floor * floor:
+                    S.jbuf[nrel] = j
+                    nrel += 1
+    if nrel == 0:
+        return True
+    _sync(S)
+    t = S.fs[F_T]
+    for i in range(nrel):
+        j = S.jbuf[i]
+        if not _deactivate(S, j, _engage_level(S, j)):
+            return False
+        _log(S, t, j, EV_RELEASE)
+    return True
+
+
+@kernel(inline="always")
+def _due(S, j):
+    """The event contact j is due at this instant, if its state disagrees with its motion.
+
+    Several contacts can reach their levels at the same instant (a mirror-symmetric
+    line opens two at once); the step lands on one, and the others sit within rounding
+    of their level, possibly just past it, where no crossing will ever be seen.
+    """
+    t = S.fs[F_T]
+    dl = S.bv[j] * (t - S.bt[j])
+    dr = S.bv[j + 1] * (t - S.bt[j + 1])
+    xl = S.bx[j] + dl
+    xr = S.bx[j + 1] + dr
+    c = xl - xr
+    w = S.bv[j] - S.bv[j + 1]
+    # the rounding of a free ball's x + v (t - tref) comes from its terms, not its value;
+    # and t itself is resolved only to EPS t, in which balls closing at w move w EPS t:
+    # a gap that closes within that is closed now (else it opens and closes forever)
+    r = _rounding(abs(xl) + abs(xr) + abs(dl) + abs(dr)) + 4.0 * EPS * abs(t) * abs(w)
+    st = S.cst[j]
+    if st == ACTIVE:
+        if (c <= r and w < 0.0) or c < -r:
+            return EV_OPEN
+    elif st == FRESH:
+        if c < -r:
+            return EV_RELEASE
+    elif st == DORMANT:
+        if c >= S.fs[F_LDORM]:
+            return EV_ENGAGE
+        if c <= -S.fs[F_EPSREL]:
+            return EV_RELEASE
+    else:
+        if c >= -r and w >= S.fs[F_FLOOR]:
+            return EV_CLOSE
+        if c >= S.lvl[j]:
+            return EV_ENGAGE
+    return 0
+
+
+@kernel
+def _dormant_due(S):
+    """Whether a dormant contact at a cluster's edge has been pressed (or pulled) past its levels."""
+    ncont = S.cst.shape[0]
+    for c in range(S.ints[I_NCL]):
+        for j in (S.clo[c] - 1, S.chi[c]):
+            if j < 0 or j >= ncont or S.cst[j] != DORMANT:
+                continue
+            xl, vl, al = _ball_now(S, j)
+            xr, vr, ar = _ball_now(S, j + 1)
+            cj = xl - xr
+            if cj >= S.fs[F_LDORM] or cj <= -S.fs[F_EPSREL]:
+                return True
+    return False
+
+
+@kernel
+def _settle(S):
+    """After a change of structure, apply every event due at this instant (positions synced)."""
+    ncont = S.cst.shape[0]
+    budget = 4 * (S.ints[I_M] + 2 * S.ints[I_NCL] + 4)
+    changed = True
+    while changed:
+        changed = False
+        budget -= 1
+        if budget < 0:
+            return False  # contacts flipping back and forth: a defect, reported by the driver
+        for c in range(S.ints[I_NCL]):
+            j0 = max(S.clo[c] - 1, 0)
+            j1 = min(S.chi[c], ncont - 1)
+            for j in range(j0, j1 + 1):
+                kind = _due(S, j)
+                if kind != 0:
+                    if not _apply_event(S, j, kind):
+                        return False
+                    changed = True
+                    break
+            if changed:
+                break
+    return True
+
+
+@kernel
+def _post_step(S):
+    """After an accepted step or jump: season contacts, then apply its event or release contacts."""
+    if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
+        _season(S)
+    k = S.ints[I_EVK]
+    if k != 0:
+        S.ints[I_EVK] = 0
+        _sync(S)
+        if not _apply_event(S, S.ints[I_EVJ], k):
+            return False
+    elif S.ints[I_M] > 0:
+        if _dormant_due(S):
+            _sync(S)
+            S.ints[I_DIRTY] = 1
+        elif not _release_quiet(S):
+            return False
+    if S.ints[I_DIRTY] == 1:
+        return _settle(S)
+    return True
+
+
+@kernel(inline="always")
+def _end_ball(S, b, t):
+    p = S.bmap[b]
+    if p >= 0:
+        return S.X[p], S.V[p], S.A[p]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b], 0.0
+
+
+@entry
+def advance(S):
+    """Run until something needs the driver; return a status code (ST_*).
+
+    The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
+    snapshot, empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW
+    and calls again.
+    """
+    nsteps = 0
+    while True:
+        if S.ints[I_DIRTY] == 1:
+            need = _rebuild(S)
+            if need > 0:
+                S.ints[I_NEED] = need
+                return ST_GROW
+        t = S.fs[F_T]
+        # snapshots inside the last step, before its event reshapes the clusters
+        if S.ints[I_HAVEOUT] == 1 and S.fs[F_TOUT] <= t:
+            _snapshot(S, S.fs[F_TOUT])
+            S.ints[I_HAVEOUT] = 0
+            return ST_OUTPUT
+        if S.ints[I_POST] == 1:
+            if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 4:
+                return ST_FLUSH
+            S.ints[I_POST] = 0
+            if not _post_step(S):
+                return ST_GROW
+            continue
+        if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
+            return ST_EVENT_LIMIT
+        tend = S.fs[F_TEND]
+        # next free-pair collision
+        tcol = np.inf
+        if _heap_valid_top(S):
+            tcol = S.hp_t[0]
+            if tcol <= t:
+                # collisions at one instant: each contact closes there at most a few
+                # times; more means states flipping back and forth, a defect that is
+                # reported (as by _settle) rather than run forever
+                if t == S.fs[F_TSAME]:
+                    S.ints[I_NSAME] += 1
+                    if S.ints[I_NSAME] > 4 * S.cst.shape[0] + 64:
+                        S.ints[I_NEED] = 0
+                        return ST_GROW
+                else:
+                    S.fs[F_TSAME] = t
+                    S.ints[I_NSAME] = 0
+                j = S.hp_j[0]
+                _heap_pop(S)
+                S.ints[I_EVJ] = j
+                S.ints[I_EVK] = EV_CLOSE
+                S.ints[I_POST] = 1
+                continue
+        if t >= tend:
+            return ST_STOP_TIME
+        if S.ints[I_NCL] == 0:
+            if tcol == np.inf:
+                return ST_TERMINAL
+            # free flight: jump straight to the next collision (or the stop time)
+            tn = min(tcol, tend)
+            S.fs[F_TPREV] = t
+            S.fs[F_HLAST] = tn - t
+            S.fs[F_T] = tn
+            S.ints[I_JUMP] = 1
+            continue
+        nsteps += 1
+        if nsteps > YIELD_STEPS:
+            return ST_YIELD
+        # ---- one accepted step, ending at the earliest event if there is one ------------
+        _save_start(S)
+        # the series where it reaches further than DOP853's next step, else DOP853
+        h = S.fs[F_H]
+        ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS else 0.0
+        tay = ht >= h
+        S.ints[I_TAY] = 1 if tay else 0
+        if tay:
+            h = ht
+        order = PT if tay else 8
+        tclip = min(tcol, tend)
+        clipped = False
+        if t + h >= tclip:
+            h = tclip - t
+            clipped = True
+        S.fs[F_TPREV] = t
+        S.ints[I_JUMP] = 0
+        while True:
+            err = _step(S, h)
+            S.fs[F_HLAST] = h
+            if not np.isfinite(err):
+                if h < 1e-12 * max(1.0, abs(t)):
+                    return ST_NON_FINITE
+                h *= 0.2
+                S.ints[I_REJ] += 1
+                clipped = False
+                continue
+            th, j, kind, lev = _find_event(S)
+            if err <= 1.0:
+                break
+            S.ints[I_REJ] += 1
+            if j >= 0:
+                # a step over a contact's change of state fails its error test where the
+                # force is not smooth; the event cuts the step anyway: go and land on it
+                # (the landing step passes the test, or is halved and retried)
+                break
+            h *= max(0.2, 0.9 * err ** (-1.0 / order))
+            clipped = False
+            if h < 8.0 * EPS * max(1.0, abs(t)):
+                return ST_STEP_UNDERFLOW
+        if tay:
+            hnext = S.fs[F_H]  # DOP853's proposal stands; the series sizes its own steps
+        else:
+            hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
+        if j >= 0:
+            # redo the step to end on the event, then refine by Newton on the step itself
+            hev = th * h
+            landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
+            nit = 0
+            while landing == 0:
+                if not (_step(S, hev) <= 1.0):
+                    landing = 2
+                    break
+                xl, vl, al = _end_ball(S, j, t + hev)
+                xr, vr, ar = _end_ball(S, j + 1, t + hev)
+                res = (xl - xr) - lev
+                w = vl - vr
+                if abs(res) <= _rounding(abs(xl) + abs(xr)) or w == 0.0:
+                    landing = 1
+                    break
+                dh = -res / w
+                nit += 1
+                if abs(dh) > 0.5 * hev or nit == 6:
+                    landing = 3  # the state stays that of the last step taken
+                    break
+                hev += dh
+            if landing == 2:
+                # the shorter step failed its error test: halve it and look again
+                _restore_start(S)
+                S.fs[F_H] = 0.5 * hev
+                S.ints[I_REJ] += 1
+                continue
+            if landing == 3 and err > 1.0:
+                # an event seen only on a failed step, and not there on a good one:
+                # shrink the step as for any failed step
+                _restore_start(S)
+                S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / order))
+                continue
+            S.fs[F_HLAST] = hev
+            S.fs[F_T] = t + hev
+            S.ints[I_EVJ] = j
+            S.ints[I_EVK] = kind
+            # shorter than the step just cut short: its error estimate spoke for a
+            # stretch that crossed the event, smoother than what follows it (after a
+            # contact opens, the balls it leaves change fastest)
+            S.fs[F_H] = min(hnext, AFTER_EVENT * h)
+        else:
+            S.fs[F_T] = tclip if clipped else t + h
+            if not tay:
+                S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
+        S.ints[I_STEPS] += 1
+        S.ints[I_POST] = 1

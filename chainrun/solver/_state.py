@@ -1,0 +1,173 @@
+"""The solver's state: the ``State`` arrays, their scalar slots, and the shared constants.
+
+Every kernel takes one ``State`` and reads its scalars through the slots ``F_*`` (in
+``fs``) and ``I_*`` (in ``ints``). The status codes (``ST_*``), contact states and
+event kinds (``EV_*``) are the kernels' vocabulary with the driver; the sizes of the
+series and of their work tiles are shared by the steppers and the generated code.
+``_tw`` and ``_find_cluster`` are here, beside the layout they index, because the
+generated code and the heap use them.
+
+State model
+-----------
+A ball is either *free* (no active contact; it moves as ``x + v (t - tref)``) or a
+member of a *cluster*, a maximal run of balls joined by active contacts. Only cluster
+balls are integrated: their state is packed, cluster after cluster, into compact
+arrays (``_clusters._rebuild``) and advanced together.
+
+Contact states (``cst``)::
+
+    DORMANT  touching at zero compression since t = 0, never pressed; engages when
+             its force would reach ``FORCE_DORMANT`` (not logged: it was closed already)
+    FRESH    active, not yet compressed beyond the floor's compression ``eps_rel``;
+             openings fire only below minus the rounding level of its positions
+    ACTIVE   active ("seasoned"); opens exactly where the compression crosses 0
+    OPEN     inactive; closes where the gap reaches 0 with approach speed >= floor,
+             or engages where the compression exceeds ``lvl[j]`` (a slow press)
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from chainrun.solver._jit import kernel
+
+
+# ---- DOP853 (its tableau is written into the stage code by _codegen) -----------------
+_NS = 12  # stages of the step proper; row 12 holds f at the step's end (FSAL)
+_NSE = 16  # with the three extra stages of the dense output
+# ---- Taylor series (see _taylor) -------------------------------------------------------
+PT = 24  # order of the series of x(t)
+# the series' steps keep their truncation estimate within this fraction of the
+# tolerance: an estimate from the last terms is not a bound, and DOP853's, which the
+# tolerance was set against, is pessimistic (its steps are far more accurate than it says)
+TAYLOR_TOL = 0.1
+# the series is tried only on windows of at most this many clusters: a step of many
+# clusters (a line broken by many impacting balls) ends at the next event of any of
+# them, sooner than either method's step, and the series then costs more than DOP853
+SERIES_CLUSTERS = 8
+# Bernstein coefficients on [0, 1] of a polynomial of degree DB from its power
+# coefficients, b_i = sum_k C(i, k) / C(DB, k) a_k, stored transposed (_BERN[k, i]);
+# the terms of a series beyond DB are bounded by the sum of their magnitudes. At the
+# front of a Hertz wave a compression grows a thousandfold over a step, and those terms
+# are large: at degree 10 the scan flagged 1.7 lanes per step that never reach 0, each
+# then sampled in vain (_contact_event); at degree 16, 0.5
+DB = 16
+# the weights j / k of the force series' recurrence, and 1 / ((k + 1)(k + 2)), the step
+# from the forces' order k to the positions' order k + 2 (see _series_orders)
+J_OVER_K = np.array([[j / k if k else 0.0 for j in range(PT)] for k in range(PT)])
+SERIES_SCALE = np.array([1.0 / ((k + 1) * (k + 2)) for k in range(PT)])
+_BERN = np.array([[math.comb(i, k) / math.comb(DB, k) if k <= i else 0.0
+                   for i in range(DB + 1)] for k in range(DB + 1)])
+
+# ---- status codes returned by ``advance`` ---------------------------------------------
+ST_TERMINAL = 0
+ST_STOP_TIME = 1
+ST_OUTPUT = 2
+ST_YIELD = 3
+ST_GROW = 4
+ST_FLUSH = 5
+ST_EVENT_LIMIT = 6
+ST_NON_FINITE = 7
+ST_STEP_UNDERFLOW = 8
+
+# ---- contact states -------------------------------------------------------------------
+DORMANT = 3
+FRESH = 1
+ACTIVE = 2
+OPEN = 0
+
+# ---- event kinds (same values as chainrun.solver.EventKind) ---------------------------
+EV_RELEASE = -2
+EV_OPEN = -1
+EV_CLOSE = 1
+EV_ENGAGE = 2
+
+#: a dormant contact engages where its force c^alpha would reach this (fs[F_LDORM] =
+#: FORCE_DORMANT^(1/alpha), 1e-24 for alpha = 1, 1e-16 for Hertz): far below rounding of
+#: order-1 velocities, it keeps subnormals out of the front, and the balls ahead of a
+#: wave, which it never moves, out of the window
+FORCE_DORMANT = 1e-24
+#: a dormant contact pressed at the end of a step less than FORCE_LOCATE^(1/alpha)
+#: (fs[F_LLOCATE], 1e-18 for alpha = 1, 1e-12 for Hertz) engages there without being
+#: located: the force it missed, over a fraction of the step, is below FORCE_LOCATE
+FORCE_LOCATE = 1e-18
+EPS = 2.220446049250313e-16
+N_SAMPLES = 8  # subintervals sampled per step for each candidate contact
+N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
+# the series' work tiles TW (see _tw): lanes in tiles of SERIES_TILE, each tile holding
+# TILE_ROWS rows: the compressions' series c_k (rows k <= PT), the forces' f_k (rows
+# PT + 1 + k), 1 / c_0 (row 2 PT), and the bounds of the compression over a series step
+# (rows LO_ROW, HI_ROW, _series_bounds); TR holds each contact lane's mask (1 inside a
+# cluster, _rebuild)
+SERIES_TILE = 16
+LO_ROW = 2 * PT + 1
+HI_ROW = 2 * PT + 2
+TILE_ROWS = 2 * PT + 3
+TILE_STRIDE = TILE_ROWS * SERIES_TILE
+#: the step after an event, as a fraction of the step that crossed it (measured on
+#: linear lines: 1 rejects 40% of the steps at N = 10^5, 0.8 about 14%)
+AFTER_EVENT = 0.8
+YIELD_STEPS = 20000
+
+# ---- scalar slots ---------------------------------------------------------------------
+# float scalars
+F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_LDORM, F_LLOCATE, F_NFLOAT = range(19)
+# int scalars
+I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
+    I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
+    I_NSAME, I_DSTAMP, I_TAY, I_NINT = range(23)
+
+State = namedtuple(
+    "State",
+    [
+        # balls, shape (N,)
+        "bx", "bv", "bt", "sep_t", "sep_v", "bmap",
+        # contacts, shape (N-1,) (at least 1)
+        "cst", "lvl", "stamp",
+        # clusters: ball range, offset in the compact arrays, energy since the last change
+        "clo", "chi", "coff", "cen",
+        # compact (integrated) balls: state, step start, dense-stage positions (XS),
+        # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
+        # the stamp of the step they were built for (DM, see _dense_at); the Taylor
+        # series of the positions (TX), order-major (see _taylor), with the work tiles
+        # of the compressions' and forces' series (TW, see _tw) and lane mask (TR),
+        # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
+        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
+        "TX", "TW", "TR", "TD", "TS",
+        # heap of free-pair collisions
+        "hp_t", "hp_j", "hp_s",
+        # event log buffer
+        "ev_t", "ev_j", "ev_k",
+        # snapshot buffer
+        "ox", "ov",
+        # scratch lists of ball / contact indices, shape (N,)
+        "freed", "jbuf",
+        # scalars
+        "fs", "ints",
+    ],
+)
+
+
+@kernel(inline="always")
+def _tw(p, r):
+    """Index in the work tiles TW of row r of contact lane p."""
+    return (p // SERIES_TILE) * TILE_STRIDE + r * SERIES_TILE + p % SERIES_TILE
+
+
+@kernel(inline="always")
+def _find_cluster(S, b):
+    lo = 0
+    hi = S.ints[I_NCL] - 1
+    while lo <= hi:
+        mid = (lo + hi) // 2
+        if S.chi[mid] < b:
+            lo = mid + 1
+        elif S.clo[mid] > b:
+            hi = mid - 1
+        else:
+            return mid
+    return -1
