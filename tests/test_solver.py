@@ -598,3 +598,12 @@ def test_the_entry_points_are_cached_under_the_keyed_folder():
     assert folder.name == f"kernels-{_jit.source_hash()[:16]}"
     for entry in (_loop.advance, _loop._snapshot):
         assert _jit._cached(entry, folder), entry
+
+
+def test_the_kernels_event_codes_are_the_public_event_kinds():
+    """The event log written by the kernels is read as EventKind: the codes must agree."""
+    from chainrun.solver import _state
+
+    kernel_codes = {name[3:]: getattr(_state, name) for name in dir(_state)
+                    if name.startswith("EV_")}
+    assert kernel_codes == {kind.name: kind.value for kind in EventKind}
