@@ -28,7 +28,7 @@ from chainrun.solver._state import (
     F_FLOOR, F_HLAST, F_LDORM, F_LLOCATE, F_TPREV, HI_ROW, I_EVTOTAL, I_M, I_NCL, I_NEV,
     I_TAY, LO_ROW, N_SAMPLES, N_SERIES_SAMPLES, OPEN, _tw,
 )
-from chainrun.solver._steppers import _ball_at
+from chainrun.solver._steppers import _ball_at, _ball_end
 
 
 @kernel(inline="always")
@@ -47,18 +47,6 @@ def _contact_at(S, j, th):
     xl, vl = _ball_at(S, j, th)
     xr, vr = _ball_at(S, j + 1, th)
     return xl - xr, vl - vr, abs(xl) + abs(xr)
-
-
-@kernel(inline="always")
-def _ball_end(S, b, th):
-    """(x, v) of ball b at the start (th = 0) or the end (th = 1) of the last step."""
-    p = S.bmap[b]
-    if p >= 0:
-        if th >= 1.0:
-            return S.X[p], S.V[p]
-        return S.X0[p], S.V0[p]
-    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
-    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
 
 
 @kernel(inline="always")

@@ -239,20 +239,28 @@ def _poly(F, y0, p, th):
 
 
 @kernel(inline="always")
-def _ball_at(S, b, th):
-    """(x, v) of ball b at t_prev + th * h_last (its interpolant is built if need be)."""
+def _ball_end(S, b, th):
+    """(x, v) of ball b at the start (th <= 0) or the end (th >= 1) of the last step,
+    or at any th if it flies freely: no interpolant needed (inlined where it is hot)."""
     p = S.bmap[b]
     if p >= 0:
         if th >= 1.0:
             return S.X[p], S.V[p]
-        if th <= 0.0:
-            return S.X0[p], S.V0[p]
+        return S.X0[p], S.V0[p]
+    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
+    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+
+
+@kernel(inline="always")
+def _ball_at(S, b, th):
+    """(x, v) of ball b at t_prev + th * h_last (its interpolant is built if need be)."""
+    p = S.bmap[b]
+    if p >= 0 and 0.0 < th < 1.0:
         if S.ints[I_TAY] == 1:
             return _taylor_at(S, p, th * S.fs[F_HLAST])
         _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
-    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
-    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+    return _ball_end(S, b, th)
 
 
 @kernel(inline="always")
