@@ -13,6 +13,7 @@ import click
 
 from chainrun import __version__
 from chainrun.cli.analyze import analyze
+from chainrun.cli.info import info
 from chainrun.cli.plot import plot
 from chainrun.cli.simulate import simulate
 
@@ -32,6 +33,7 @@ def main():
       chainrun simulate configs/table1.toml          # the paper's Table 1
       chainrun simulate my.yaml -o results/mine --jobs 2
       chainrun simulate --help                       # the experiment file format
+      chainrun info results/table1                   # what the runs hold, at a glance
       chainrun plot --list                           # the paper's figures and tables
       chainrun analyze fig05 && chainrun plot fig05  # one figure from its runs
     """
@@ -44,5 +46,6 @@ def main():
 
 
 main.add_command(simulate)
+main.add_command(info)
 main.add_command(analyze)
 main.add_command(plot)
