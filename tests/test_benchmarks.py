@@ -10,20 +10,14 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from benchmarks import run  # noqa: E402
-from benchmarks.peers import rk4_paper, scipy_dop853  # noqa: E402
-from chainrun.config import parse_experiment  # noqa: E402
-from chainrun.solver import simulate  # noqa: E402
+from benchmarks import run
+from benchmarks.peers import rk4_paper, scipy_dop853
+from chainrun.config import parse_experiment
+from chainrun.solver import simulate
 
 
 @pytest.fixture(scope="module")

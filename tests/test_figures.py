@@ -22,10 +22,7 @@ from chainrun.analysis import recipe
 from chainrun.cli import main
 from chainrun.config import load_experiment
 
-try:
-    from test_analysis import FAST, ROOT, built  # noqa: F401  (built: a shared fixture)
-except ImportError:  # tests/ imported as a package
-    from tests.test_analysis import FAST, ROOT, built  # noqa: F401
+from test_analysis import FAST, ROOT, built  # noqa: F401  (built: a shared fixture)
 
 FIGURES = [a.name for a in artefacts.ARTEFACTS if a.kind == "figure"]
 FAST_FIGURES = [name for name in FIGURES if name in FAST]

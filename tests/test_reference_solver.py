@@ -14,10 +14,7 @@ from decimal import Decimal
 import numpy as np
 import pytest
 
-try:
-    from reference import CLOSE, OPEN, reference_solve
-except ImportError:  # tests/ imported as a package
-    from tests.reference import CLOSE, OPEN, reference_solve
+from reference import CLOSE, OPEN, reference_solve
 
 #: One table of tolerances for this file.
 TOL = {

@@ -21,10 +21,7 @@ from chainrun.solver import EventKind, Outcome, simulate
 from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
-try:
-    from reference import reference_solve
-except ImportError:  # tests/ imported as a package
-    from tests.reference import reference_solve
+from reference import reference_solve
 
 #: One table of tolerances for this file.
 TOL = {
