@@ -3,7 +3,22 @@
 The package owns the whole path from an experiment file to reproducible results:
 ``config`` (validated experiments), ``solver`` (the event-driven numba solver),
 ``store`` (the only module that touches HDF5), ``runner`` (runs experiments and sweeps)
-and ``cli`` (the ``chainrun`` command).
+and ``cli`` (the ``chainrun`` command); ``api`` is the same from Python::
+
+    import chainrun
+    ds = chainrun.simulate("cradle.toml")      # an xarray Dataset
+    ds = chainrun.open_run("results/cradle/run.h5")
 """
 
 __version__ = "0.1.0"
+
+__all__ = ["open_run", "simulate"]
+
+
+def __getattr__(name):
+    # imported on first use: ``import chainrun`` stays light for the command line
+    if name in __all__:
+        from chainrun import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'chainrun' has no attribute {name!r}")

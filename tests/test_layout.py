@@ -20,7 +20,7 @@ RANK = {
     "chainrun.store": 3,
     "chainrun.runner": 4, "chainrun.analysis": 4,
     "chainrun.plotting": 5,
-    "chainrun.cli": 6,
+    "chainrun.cli": 6, "chainrun.api": 6,
     "chainrun": 7, "chainrun.__main__": 7,
 }
 #: outside libraries a part must not use (the solver never touches files, the
