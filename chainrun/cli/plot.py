@@ -24,8 +24,25 @@ from chainrun.errors import ChainrunError
               default=Path("results"), show_default=True,
               help="Results folder: analysis files are read from RESULTS/analysis/, outputs "
                    "written under RESULTS/.")
-def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results: Path):
-    """Draw the figures and tables NAMES from their analysis files.
+@click.option("--what", default=",".join(("spacetime", "profiles", "final", "energy")),
+              show_default=True, metavar="VIEWS",
+              help="For a run file or folder: the views to draw, comma-separated: spacetime "
+                   "(velocity over ball and time), profiles (velocity along the line at "
+                   "some snapshot times), final (final velocity of each ball), energy.")
+@click.option("--log", is_flag=True,
+              help="For a run file or folder: final velocities on a (symmetric) log scale.")
+@click.option("-o", "--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="For a run file or folder: where the views go (default: a figures/ "
+                   "folder beside each run file).")
+def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results: Path,
+         what: str, log: bool, out: Path | None):
+    """Draw the figures and tables NAMES from their analysis files, or the standard
+    views of run files and output folders NAMES.
+
+    A NAME that is a run file (or an output folder of run files) gets its views,
+    drawn from the file alone: a space-time diagram of the velocity, velocity
+    profiles at snapshot times, the final velocities and the energy over time, each as
+    PNG and PDF (--what picks them).
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -35,6 +52,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
 
     \b
     Examples:
+      chainrun plot results/cradle/run.h5            # -> results/cradle/figures/
+      chainrun plot results/table1 --what final --log
       chainrun plot --list
       chainrun plot fig05
       chainrun plot --all
@@ -59,8 +78,23 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                 click.echo(f"{'':28s}from: {inputs}")
                 click.echo(f"{'':28s}to:   {outputs or artefacts.analysis_path(a.name, results)}")
         return
-    from chainrun.plotting import render
+    from chainrun.plotting import render, render_run
 
+    if names and all(Path(name).exists() for name in names):
+        views = [v.strip() for v in what.split(",") if v.strip()]
+        for name in names:
+            folder = Path(name)
+            files = sorted(p for p in folder.glob("*.h5") if p.name != "index.h5") \
+                if folder.is_dir() else [folder]
+            if not files:
+                fail(f"{name}: no run files")
+            for path in files:
+                try:
+                    paths = render_run(path, views, out=out, log=log)
+                except ChainrunError as exc:
+                    fail(str(exc))
+                click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
+        return
     if all_:
         names = tuple(a.name for a in artefacts.ARTEFACTS if a.plot is not None)
     if not names:

@@ -1,6 +1,7 @@
 """Plotting: figures and tables drawn from analysis files, and nothing computed anew.
 
-This package owns the look of every output. ``render(name)`` reads the artefact's analysis
+This package owns the look of every output. ``render_run(path)`` draws the standard
+views of any run file (``views``). ``render(name)`` reads the artefact's analysis
 file (through ``chainrun.store``), asks the artefact's module (``chainrun.plotting.figNN``,
 ``table1``, ``comparison``) to draw it, and writes the outputs named in
 ``chainrun.artefacts``:
@@ -24,7 +25,7 @@ from chainrun import artefacts, atomic
 from chainrun.errors import ChainrunError
 from chainrun.store import AnalysisData, read_analysis
 
-__all__ = ["STYLE", "draw", "render", "style"]
+__all__ = ["STYLE", "draw", "render", "render_run", "style"]
 
 #: The one matplotlib style of chainrun, shipped in the package.
 STYLE = Path(__file__).with_name("chainrun.mplstyle")
@@ -89,14 +90,47 @@ def render(name: str, *, results="results") -> list[Path]:
         path.parent.mkdir(parents=True, exist_ok=True)
     if artefact.kind == "figure":
         with style():
-            figure = module.draw(data)
-            for path in outputs:
-                metadata = PNG_METADATA if path.suffix == ".png" else PDF_METADATA
-                atomic.write(path, lambda tmp: figure.savefig(
-                    tmp, format=path.suffix[1:], metadata=metadata))
+            _save(module.draw(data), outputs)
     else:
         texts = module.write(data)
         for path in outputs:
             text = texts[path.suffix]
             atomic.write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return outputs
+
+
+def _save(figure, outputs: list[Path]) -> None:
+    """Write ``figure`` to each path (PNG or PDF) atomically, with the fixed metadata."""
+    for path in outputs:
+        metadata = PNG_METADATA if path.suffix == ".png" else PDF_METADATA
+        atomic.write(path, lambda tmp: figure.savefig(
+            tmp, format=path.suffix[1:], metadata=metadata))
+
+
+def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
+    """Draw the standard views (``views.VIEWS``) of the run file at ``path``.
+
+    Each view goes to ``<out>/<run file stem>-<view>.png`` and ``.pdf``; ``out``
+    defaults to a ``figures`` folder beside the run file. Returns the files written.
+
+    Raises
+    ------
+    ChainrunError
+        If the file is not a run file, a view is unknown, or the run lacks the
+        snapshots a view needs.
+    """
+    from chainrun.plotting.views import VIEWS, draw_view
+    from chainrun.store import read_run
+
+    path = Path(path)
+    run = read_run(path)
+    views = VIEWS if views is None else tuple(views)
+    out = path.parent / "figures" if out is None else Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    with style():
+        for view in views:
+            outputs = [out / f"{path.stem}-{view}{suffix}" for suffix in (".png", ".pdf")]
+            _save(draw_view(run, view, log=log), outputs)
+            written += outputs
+    return written

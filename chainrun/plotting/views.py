@@ -1,0 +1,106 @@
+"""Standard views of any run file, drawn from what the file stores and nothing else.
+
+``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
+wave front shows), ``profiles`` (velocity along the line at some snapshot times),
+``final`` (final velocity of every ball) and ``energy`` (kinetic, contact and total
+energy over time). Each artist carries a ``gid`` naming the array it shows, so tests
+can match what is drawn with the file.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from chainrun.errors import ChainrunError
+
+__all__ = ["VIEWS", "draw_view"]
+
+VIEWS = ("spacetime", "profiles", "final", "energy")
+#: an image wider than this many balls shows every s-th ball (the file is read so)
+MAX_IMAGE_BALLS = 2000
+#: profiles drawn at most
+MAX_PROFILES = 6
+_UNITS = "paper units"
+
+
+def _snapshots_needed(run, view: str, least: int) -> None:
+    if run.times.size < least:
+        raise ChainrunError(f"{run.path}: {view} needs at least {least} snapshots, the file "
+                            f"has {run.times.size} (set output.times in the experiment)")
+
+
+def _spacetime(run, figure: Figure, axes) -> None:
+    _snapshots_needed(run, "spacetime", 2)
+    stride = -(-run.n // MAX_IMAGE_BALLS)
+    v = np.asarray(run.velocities[:, ::stride])
+    balls = np.arange(1, run.n + 1)[::stride]
+    top = float(np.max(np.abs(v))) or 1.0
+    image = axes.imshow(v.T, origin="lower", aspect="auto", cmap="RdBu_r",
+                        vmin=-top, vmax=top, interpolation="nearest",
+                        extent=(run.times[0], run.times[-1], balls[0] - 0.5,
+                                balls[-1] + stride - 0.5), gid="velocity")
+    figure.colorbar(image, ax=axes, label=f"velocity ({_UNITS})")
+    axes.set_xlabel(f"time ({_UNITS})")
+    axes.set_ylabel("ball" + (f" (every {stride}th)" if stride > 1 else ""))
+
+
+def _profiles(run, figure: Figure, axes) -> None:
+    _snapshots_needed(run, "profiles", 1)
+    picks = np.unique(np.linspace(0, run.times.size - 1, MAX_PROFILES).round().astype(int))
+    balls = np.arange(1, run.n + 1)
+    for i in picks:
+        t = run.times[i]
+        axes.plot(balls, run.velocities[i], label=f"t = {t:.4g}", gid=f"velocity/{i}")
+    axes.set_xlabel("ball")
+    axes.set_ylabel(f"velocity ({_UNITS})")
+    axes.legend(fontsize="small")
+
+
+def _final(run, figure: Figure, axes, log: bool) -> None:
+    v = run.final_velocity
+    axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=3, color="black",
+              gid="final_velocity")
+    axes.axhline(0.0, color="0.6", linewidth=0.6)
+    axes.set_xlabel("ball")
+    axes.set_ylabel(f"final velocity ({_UNITS})")
+    if log:
+        small = np.abs(v[v != 0.0])
+        axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
+                                                1e-12))
+
+
+def _energy(run, figure: Figure, axes) -> None:
+    _snapshots_needed(run, "energy", 2)
+    t = run.times
+    kinetic = run.observables["kinetic_energy"]
+    stored = run.observables["potential_energy"]
+    axes.plot(t, kinetic, label="kinetic", gid="kinetic_energy")
+    axes.plot(t, stored, label="in contacts", gid="potential_energy")
+    axes.plot(t, kinetic + stored, label="total", color="black", gid="total_energy")
+    axes.set_xlabel(f"time ({_UNITS})")
+    axes.set_ylabel(f"energy ({_UNITS})")
+    axes.legend(fontsize="small")
+
+
+def draw_view(run, view: str, *, log: bool = False) -> Figure:
+    """The Figure of ``view`` (one of ``VIEWS``) for a run (``chainrun.store.RunData``).
+
+    ``log`` draws the final velocities on a symmetric log scale (linear below the
+    smallest non-zero magnitude). Must be called inside ``chainrun.plotting.style()``
+    for the figure to look as saved.
+    """
+    if view not in VIEWS:
+        raise ChainrunError(f"no view {view!r} (the views: {', '.join(VIEWS)})")
+    figure = Figure()
+    axes = figure.add_subplot()
+    if view == "final":
+        _final(run, figure, axes, log)
+    else:
+        {"spacetime": _spacetime, "profiles": _profiles, "energy": _energy}[view](
+            run, figure, axes)
+    experiment = run.parameters.get("experiment", "")
+    run_id = run.parameters.get("run_id", "")
+    axes.set_title(f"{experiment} {run_id}: N = {run.n}, K = {run.k}, "
+                   f"alpha = {run.alpha:g}", fontsize="medium")
+    return figure

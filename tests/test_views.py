@@ -1,0 +1,104 @@
+"""Views of any run (``chainrun plot RUN``): what is drawn is what the file holds, read
+back from the figures' artists and compared with the file read by h5py."""
+
+from __future__ import annotations
+
+import hashlib
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from chainrun.cli import main
+from chainrun.plotting import render_run, style
+from chainrun.plotting.views import VIEWS, draw_view
+from chainrun.store import read_run
+
+WAVE = """name = "wave"
+[chain]
+n = 30
+k = 2
+alpha = 1.5
+[output]
+times = {start = 0, stop = 40, step = 0.5}
+"""
+
+
+@pytest.fixture(scope="module")
+def wave(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("views")
+    (folder / "wave.toml").write_text(WAVE)
+    result = CliRunner().invoke(main, ["simulate", str(folder / "wave.toml"), "-o",
+                                       str(folder / "out")])
+    assert result.exit_code == 0, result.output
+    path = folder / "out" / "run.h5"
+    with h5py.File(path) as f:
+        raw = dict(v=f["particles/chain/velocity/value"][:, :, 0],
+                   t=f["particles/chain/velocity/time"][()],
+                   final=f["results/final_velocity"][()],
+                   kinetic=f["observables/kinetic_energy/value"][()],
+                   stored=f["observables/potential_energy/value"][()])
+    return path, raw
+
+
+def artist(figure, gid):
+    axes = figure.axes[0]
+    return next(a for a in axes.get_children() if a.get_gid() == gid)
+
+
+def test_the_spacetime_image_is_the_velocity_snapshots(wave):
+    path, raw = wave
+    with style():
+        figure = draw_view(read_run(path), "spacetime")
+    image = artist(figure, "velocity")
+    np.testing.assert_array_equal(image.get_array(), raw["v"].T)
+    left, right, bottom, top = image.get_extent()
+    assert (left, right) == (raw["t"][0], raw["t"][-1]) and (bottom, top) == (0.5, 30.5)
+    assert "velocity" in figure.axes[1].get_ylabel()  # the colour bar
+
+
+def test_final_velocities_and_profiles_are_the_files(wave):
+    path, raw = wave
+    run = read_run(path)
+    with style():
+        final = draw_view(run, "final", log=True)
+        profiles = draw_view(run, "profiles")
+    line = artist(final, "final_velocity")
+    np.testing.assert_array_equal(line.get_xdata(), np.arange(1, 31))
+    np.testing.assert_array_equal(line.get_ydata(), raw["final"])
+    assert final.axes[0].get_yscale() == "symlog"
+    drawn = [a for a in profiles.axes[0].get_lines() if str(a.get_gid()).startswith("velocity/")]
+    assert 2 <= len(drawn) <= 6
+    for a in drawn:
+        np.testing.assert_array_equal(a.get_ydata(), raw["v"][int(a.get_gid().split("/")[1])])
+
+
+def test_the_energy_view_shows_energy_conserved(wave):
+    path, raw = wave
+    with style():
+        figure = draw_view(read_run(path), "energy")
+    np.testing.assert_array_equal(artist(figure, "kinetic_energy").get_ydata(), raw["kinetic"])
+    np.testing.assert_array_equal(artist(figure, "potential_energy").get_ydata(), raw["stored"])
+    total = artist(figure, "total_energy").get_ydata()
+    np.testing.assert_allclose(total, 1.0, rtol=1e-9)  # K = 2 balls at velocity 1: K/2
+
+
+def test_plot_writes_every_view_the_same_bytes_twice(wave, tmp_path):
+    path, _ = wave
+    first = render_run(path, out=tmp_path / "a")
+    second = render_run(path, out=tmp_path / "b")
+    assert [p.name for p in first] == [f"run-{v}{s}" for v in VIEWS for s in (".png", ".pdf")]
+    digest = [hashlib.sha256(p.read_bytes()).digest() for p in first]
+    assert digest == [hashlib.sha256(p.read_bytes()).digest() for p in second]
+
+
+def test_the_command_draws_a_run_and_refuses_what_it_cannot(wave, tmp_path):
+    path, _ = wave
+    runner = CliRunner()
+    result = runner.invoke(main, ["plot", str(path), "--what", "final", "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run-final.pdf", "run-final.png"]
+    result = runner.invoke(main, ["plot", str(path), "--what", "nonsense"])
+    assert result.exit_code == 2 and "no view 'nonsense'" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
