@@ -16,9 +16,11 @@ from typing import Callable
 _PARTIAL = ".partial-"
 
 
-def temp_name(path: Path) -> Path:
-    """The temporary name this process writes ``path`` under."""
-    return path.with_name(f".{path.name}{_PARTIAL}{os.getpid()}")
+def temp_name(path: Path, keep_suffix: bool = False) -> Path:
+    """The temporary name this process writes ``path`` under (ending in ``path``'s
+    suffix too with ``keep_suffix``, for writers that choose a format by it)."""
+    end = path.suffix if keep_suffix else ""
+    return path.with_name(f".{path.name}{_PARTIAL}{os.getpid()}{end}")
 
 
 def leftovers(folder: Path, names) -> list[Path]:
@@ -57,10 +59,11 @@ def put_in_place(temp: Path, path: Path) -> None:
     fsync_dir(path.parent)
 
 
-def write(path: Path, write_to: Callable[[Path], object]) -> None:
+def write(path: Path, write_to: Callable[[Path], object], *, keep_suffix: bool = False) -> None:
     """Write ``path`` atomically: ``write_to(temp)`` writes the content under a temporary
-    name, which is then put in place; on any error the temporary file is removed."""
-    temp = temp_name(path)
+    name (see ``temp_name``), which is then put in place; on any error the temporary
+    file is removed."""
+    temp = temp_name(path, keep_suffix)
     try:
         write_to(temp)
         put_in_place(temp, path)

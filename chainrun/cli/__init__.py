@@ -13,6 +13,7 @@ import click
 
 from chainrun import __version__
 from chainrun.cli.analyze import analyze
+from chainrun.cli.animate import animate
 from chainrun.cli.info import info
 from chainrun.cli.plot import plot
 from chainrun.cli.simulate import simulate
@@ -49,3 +50,4 @@ main.add_command(simulate)
 main.add_command(info)
 main.add_command(analyze)
 main.add_command(plot)
+main.add_command(animate)
