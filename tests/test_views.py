@@ -102,3 +102,32 @@ def test_the_command_draws_a_run_and_refuses_what_it_cannot(wave, tmp_path):
     result = runner.invoke(main, ["plot", str(path), "--what", "nonsense"])
     assert result.exit_code == 2 and "no view 'nonsense'" in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
+    from pathlib import Path
+
+    from chainrun.plotting.views import draw_sweep
+    from chainrun.store import read_index
+
+    table1 = Path(__file__).resolve().parents[1] / "configs" / "table1.toml"
+    out = tmp_path / "table1"
+    runner = CliRunner()
+    assert runner.invoke(main, ["simulate", str(table1), "-o", str(out)]).exit_code == 0
+    rows = read_index(out / "index.h5")
+    finals = {}
+    for row in rows:
+        with h5py.File(out / row["file"]) as f:
+            finals[int(row["k"])] = f["results/final_velocity"][()]
+    with style():
+        figure = draw_sweep([read_run(out / row["file"]) for row in rows], balls=(1, 2, -1))
+    for ball, column in ((1, 0), (2, 1), (-1, -1)):
+        line = artist(figure, f"final_velocity/chain.k/{ball}")
+        np.testing.assert_array_equal(line.get_xdata(), [1, 2, 3, 4])
+        np.testing.assert_array_equal(line.get_ydata(), [finals[k][column] for k in (1, 2, 3, 4)])
+    assert figure.axes[0].get_xlabel() == "chain.k"
+    result = runner.invoke(main, ["plot", str(out), "--what", "final", "--balls", "1,-1"])
+    assert result.exit_code == 0, result.output
+    assert (out / "figures" / "sweep-final.png").is_file()
+    result = runner.invoke(main, ["plot", str(out), "--balls", "first"])
+    assert result.exit_code == 2 and "--balls 'first'" in result.stderr

@@ -31,18 +31,23 @@ from chainrun.errors import ChainrunError
                    "some snapshot times), final (final velocity of each ball), energy.")
 @click.option("--log", is_flag=True,
               help="For a run file or folder: final velocities on a (symmetric) log scale.")
+@click.option("--balls", default="1,-1", show_default=True, metavar="NUMBERS",
+              help="For an output folder of a sweep: the balls whose final velocities are "
+                   "drawn against each swept key (sweep-final.png), comma-separated, "
+                   "negative from the end (-1: the last ball).")
 @click.option("-o", "--out", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="For a run file or folder: where the views go (default: a figures/ "
                    "folder beside each run file).")
 def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results: Path,
-         what: str, log: bool, out: Path | None):
+         what: str, log: bool, balls: str, out: Path | None):
     """Draw the figures and tables NAMES from their analysis files, or the standard
     views of run files and output folders NAMES.
 
     A NAME that is a run file (or an output folder of run files) gets its views,
     drawn from the file alone: a space-time diagram of the velocity, velocity
     profiles at snapshot times, the final velocities and the energy over time, each as
-    PNG and PDF (--what picks them).
+    PNG and PDF (--what picks them); an output folder of a sweep also gets its final
+    velocities against each swept key (sweep-final.png, --balls picks the balls).
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -53,7 +58,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     \b
     Examples:
       chainrun plot results/cradle/run.h5            # -> results/cradle/figures/
-      chainrun plot results/table1 --what final --log
+      chainrun plot results/table1 --what final --log --balls 1,2,-1
       chainrun plot --list
       chainrun plot fig05
       chainrun plot --all
@@ -78,22 +83,29 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                 click.echo(f"{'':28s}from: {inputs}")
                 click.echo(f"{'':28s}to:   {outputs or artefacts.analysis_path(a.name, results)}")
         return
-    from chainrun.plotting import render, render_run
+    from chainrun.plotting import render, render_run, render_sweep
 
     if names and all(Path(name).exists() for name in names):
         views = [v.strip() for v in what.split(",") if v.strip()]
+        try:
+            numbers = [int(b) for b in balls.split(",") if b.strip()]
+        except ValueError:
+            fail(f"--balls {balls!r}: expected ball numbers, e.g. 1,-1")
         for name in names:
             folder = Path(name)
             files = sorted(p for p in folder.glob("*.h5") if p.name != "index.h5") \
                 if folder.is_dir() else [folder]
             if not files:
                 fail(f"{name}: no run files")
-            for path in files:
-                try:
+            try:
+                for path in files:
                     paths = render_run(path, views, out=out, log=log)
-                except ChainrunError as exc:
-                    fail(str(exc))
-                click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
+                    click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
+                if folder.is_dir() and len(files) > 1 and (folder / "index.h5").is_file():
+                    paths = render_sweep(folder, numbers, out=out)
+                    click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
+            except ChainrunError as exc:
+                fail(str(exc))
         return
     if all_:
         names = tuple(a.name for a in artefacts.ARTEFACTS if a.plot is not None)

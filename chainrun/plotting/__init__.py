@@ -25,7 +25,7 @@ from chainrun import artefacts, atomic
 from chainrun.errors import ChainrunError
 from chainrun.store import AnalysisData, read_analysis
 
-__all__ = ["STYLE", "draw", "render", "render_run", "style"]
+__all__ = ["STYLE", "draw", "render", "render_run", "render_sweep", "style"]
 
 #: The one matplotlib style of chainrun, shipped in the package.
 STYLE = Path(__file__).with_name("chainrun.mplstyle")
@@ -134,3 +134,20 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
             _save(draw_view(run, view, log=log), outputs)
             written += outputs
     return written
+
+
+def render_sweep(folder, balls=(1, -1), *, out=None) -> list[Path]:
+    """Draw the final velocities of ``balls`` against each swept key of the sweep in
+    ``folder`` (its index.h5) into ``<out>/sweep-final.png`` and ``.pdf`` (``out``
+    defaults to ``folder/figures``). Returns the files written."""
+    from chainrun.plotting.views import draw_sweep
+    from chainrun.store import read_index, read_run
+
+    folder = Path(folder)
+    runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    out = folder / "figures" if out is None else Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    outputs = [out / f"sweep-final{suffix}" for suffix in (".png", ".pdf")]
+    with style():
+        _save(draw_sweep(runs, balls), outputs)
+    return outputs

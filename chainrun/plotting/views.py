@@ -3,8 +3,9 @@
 ``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
 wave front shows), ``profiles`` (velocity along the line at some snapshot times),
 ``final`` (final velocity of every ball) and ``energy`` (kinetic, contact and total
-energy over time). Each artist carries a ``gid`` naming the array it shows, so tests
-can match what is drawn with the file.
+energy over time). ``draw_sweep`` draws a sweep's final velocities against its swept
+keys. Each artist carries a ``gid`` naming the array it shows, so tests can match what
+is drawn with the file.
 """
 
 from __future__ import annotations
@@ -13,8 +14,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from chainrun.errors import ChainrunError
+from chainrun.plotting.common import MARKERS
 
-__all__ = ["VIEWS", "draw_view"]
+__all__ = ["VIEWS", "draw_sweep", "draw_view"]
 
 VIEWS = ("spacetime", "profiles", "final", "energy")
 #: an image wider than this many balls shows every s-th ball (the file is read so)
@@ -103,4 +105,47 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
     run_id = run.parameters.get("run_id", "")
     axes.set_title(f"{experiment} {run_id}: N = {run.n}, K = {run.k}, "
                    f"alpha = {run.alpha:g}", fontsize="medium")
+    return figure
+
+
+def _ball_index(ball: int, n: int) -> int | None:
+    """0-based index of ball number ``ball`` (negative: from the end) in a line of n."""
+    i = ball - 1 if ball > 0 else n + ball
+    return i if 0 <= i < n else None
+
+
+def draw_sweep(runs, balls=(1, -1)) -> Figure:
+    """Final velocities of ``balls`` against each swept key, a panel per key.
+
+    ``runs`` are the runs of one sweep (``chainrun.store.RunData``); ``balls`` are ball
+    numbers, 1-based, negative counting from the end (-1: the last ball). Each point
+    carries the run's id; a ball a run does not have is left out of it.
+    """
+    keys = sorted({key for run in runs for key in run.parameters.get("overrides", {})})
+    if not keys:
+        raise ChainrunError("not a sweep: its runs have no swept keys")
+    figure = Figure(figsize=(4.5 * len(keys), 3.4), layout="constrained")
+    for panel, key in enumerate(keys, start=1):
+        axes = figure.add_subplot(1, len(keys), panel)
+        for which, ball in enumerate(balls):
+            points = []
+            for run in runs:
+                value = run.parameters.get("overrides", {}).get(key)
+                i = _ball_index(ball, run.n)
+                if isinstance(value, (int, float)) and i is not None:
+                    points.append((value, run.final_velocity[i]))
+            if not points:
+                continue
+            x, y = np.array(sorted(points)).T
+            name = "last ball" if ball == -1 else (f"ball {ball}" if ball > 0
+                                                    else f"ball N{ball + 1:+d}")
+            axes.plot(x, y, label=name, color="black", gid=f"final_velocity/{key}/{ball}",
+                      linestyle=("-", "--", "-.", ":")[which % 4],
+                      **MARKERS[which % len(MARKERS)])
+        axes.axhline(0.0, color="0.6", linewidth=0.6)
+        axes.set_xlabel(key)
+        axes.set_ylabel(f"final velocity ({_UNITS})")
+        axes.legend(fontsize="small")
+    experiment = runs[0].parameters.get("experiment", "")
+    figure.suptitle(f"{experiment}: {len(runs)} runs", fontsize="medium")
     return figure
