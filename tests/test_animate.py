@@ -7,6 +7,7 @@ import shutil
 
 import pytest
 from click.testing import CliRunner
+from helpers import simulate_text
 from PIL import Image
 
 from chainrun.cli import main
@@ -23,12 +24,7 @@ times = {start = 0, stop = 12, step = 0.5}
 
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("animate")
-    (folder / "movie.toml").write_text(CONFIG)
-    result = CliRunner().invoke(main, ["simulate", str(folder / "movie.toml"), "-o",
-                                       str(folder / "out")])
-    assert result.exit_code == 0, result.output
-    return folder / "out" / "run.h5"
+    return simulate_text(tmp_path_factory.mktemp("animate"), CONFIG) / "run.h5"
 
 
 def test_a_gif_has_a_frame_per_snapshot(run_file, tmp_path):

@@ -10,10 +10,9 @@ import h5py
 import numpy as np
 import pytest
 import xarray as xr
-from click.testing import CliRunner
+from helpers import simulate_text
 
 import chainrun
-from chainrun.cli import main
 from chainrun.errors import ConfigError
 
 CRADLE = """name = "cradle"
@@ -40,12 +39,8 @@ def _same(a: xr.Dataset, b: xr.Dataset):
 
 @pytest.fixture(scope="module")
 def cradle_file(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("api")
-    config = folder / "cradle.toml"
-    config.write_text(CRADLE)
-    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(folder / "out")])
-    assert result.exit_code == 0, result.output
-    return config, folder / "out" / "run.h5"
+    out = simulate_text(tmp_path_factory.mktemp("api"), CRADLE, "cradle")
+    return out.parent / "cradle.toml", out / "run.h5"
 
 
 def test_open_run_reads_the_file(cradle_file):

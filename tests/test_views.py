@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from helpers import simulate_text
+
 from chainrun.cli import main
 from chainrun.plotting import render_run, style
 from chainrun.plotting.views import VIEWS, draw_view
@@ -27,12 +29,7 @@ times = {start = 0, stop = 40, step = 0.5}
 
 @pytest.fixture(scope="module")
 def wave(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("views")
-    (folder / "wave.toml").write_text(WAVE)
-    result = CliRunner().invoke(main, ["simulate", str(folder / "wave.toml"), "-o",
-                                       str(folder / "out")])
-    assert result.exit_code == 0, result.output
-    path = folder / "out" / "run.h5"
+    path = simulate_text(tmp_path_factory.mktemp("views"), WAVE) / "run.h5"
     with h5py.File(path) as f:
         raw = dict(v=f["particles/chain/velocity/value"][:, :, 0],
                    t=f["particles/chain/velocity/time"][()],
