@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from chainrun.solver.physics import compressions
+from chainrun.solver.physics import compressions, contact_forces
 
 __all__ = [
     "SIGNIFICANT",
@@ -264,7 +264,7 @@ def solitary_wave(run, window: tuple[float, float], balls: tuple[int, int]) -> S
     t = np.asarray(run.times, float)
     x = np.asarray(run.positions)
     v = np.asarray(run.velocities)
-    force = np.clip(compressions(x), 0.0, None) ** alpha
+    force = contact_forces(x, alpha)
     forces = [refined_peaks(t, force[:, j - 1], 0.05)[1][0] for j in train.balls]
     sel = (t >= window[0]) & (t <= window[1])
     alive = run.separation_time[None, :] > t[sel][:, None]   # NaN (never) compares False

@@ -15,6 +15,11 @@ def compressions(x: np.ndarray) -> np.ndarray:
     return x[..., :-1] - x[..., 1:]
 
 
+def contact_forces(x: np.ndarray, alpha: float) -> np.ndarray:
+    """Force of each contact, ``c_+^alpha`` (it never pulls); shape (..., N-1)."""
+    return np.clip(compressions(x), 0.0, None) ** alpha
+
+
 def momentum(v: np.ndarray) -> np.ndarray:
     """Total momentum ``sum v``; shape (...)."""
     return np.asarray(v, dtype=float).sum(axis=-1)
