@@ -128,3 +128,12 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
     assert (out / "figures" / "sweep-final.png").is_file()
     result = runner.invoke(main, ["plot", str(out), "--balls", "first"])
     assert result.exit_code == 2 and "--balls 'first'" in result.stderr
+
+
+def test_an_artefact_name_is_an_artefact_even_beside_a_folder_of_that_name(tmp_path,
+                                                                           monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fig05").mkdir()
+    result = CliRunner().invoke(main, ["plot", "fig05", "--results", str(tmp_path / "r")])
+    assert result.exit_code == 2
+    assert "chainrun analyze fig05" in result.stderr  # the artefact's own message

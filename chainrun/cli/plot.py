@@ -85,7 +85,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
         return
     from chainrun.plotting import render, render_run, render_sweep
 
-    if names and all(Path(name).exists() for name in names):
+    known = {a.name for a in artefacts.ARTEFACTS}
+    if names and all(name not in known and Path(name).exists() for name in names):
         views = [v.strip() for v in what.split(",") if v.strip()]
         try:
             numbers = [int(b) for b in balls.split(",") if b.strip()]
