@@ -40,8 +40,8 @@ __all__ = [
 #: Bytes per ball of the solver's state (``_driver._new_state``): float64 ``bx, bv, bt,
 #: sep_t, sep_v, hp_t, ox, ov`` and int64 ``bmap, hp_j, hp_s, jbuf`` (12 x 8), ``freed``
 #: (2N int64: 16), one contact per ball (``cst`` int8, ``lvl`` float64, ``stamp`` int64:
-#: 17) and N/2 clusters (``clo, chi, coff`` int64: 12).
-STATE_BYTES_PER_BALL = 12 * 8 + 16 + 17 + 12
+#: 17) and N/2 clusters (``clo, chi, coff`` int64 and ``cen`` float64: 16).
+STATE_BYTES_PER_BALL = 12 * 8 + 16 + 17 + 16
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages x 8), ``FX, FV``
 #: (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work tiles ``TW`` (51 rows

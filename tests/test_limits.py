@@ -36,6 +36,19 @@ def test_the_estimate_covers_the_solver_state(n):
     assert estimate - limits.FIXED_BYTES <= 4 * max(actual - 2 * (1 << 16) * 17, 1) + 10**6
 
 
+def test_the_bytes_per_ball_are_the_solvers_own():
+    """The per-ball constants are those of the arrays ``_driver`` allocates: what grows
+    with N in the state, and with the capacity in the window of integrated balls."""
+    from chainrun.solver import _driver
+
+    small, large = 10_000, 20_000
+    per_ball = (state_bytes(large) - state_bytes(small)) / (large - small)
+    window = (sum(a.nbytes for a in _driver._alloc_window(2048).values())
+              - sum(a.nbytes for a in _driver._alloc_window(1024).values())) / 1024
+    assert per_ball == limits.STATE_BYTES_PER_BALL
+    assert window == limits.WINDOW_BYTES_PER_BALL
+
+
 def test_the_estimate_grows_with_n_and_not_with_snapshots_times_n():
     small = limits.estimate_run_memory(10**6, 10)
     assert limits.estimate_run_memory(10**7, 10) > 9 * (small - limits.FIXED_BYTES)
