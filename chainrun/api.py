@@ -52,7 +52,8 @@ _OBSERVABLES = {
 def open_run(path) -> "xarray.Dataset":  # noqa: F821
     """The run file at ``path`` as an ``xarray.Dataset``, loaded into memory.
 
-    Data variables: ``position`` and ``velocity`` (time, ball); the observables
+    Data variables: ``position`` and ``velocity`` (time, ball); with force sensors,
+    ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``; the observables
     ``kinetic_energy``, ``potential_energy``, ``momentum`` (time); the final and
     separation positions, velocities and times (ball); the event log ``event_time``,
     ``event_contact``, ``event_kind`` (event). Attributes: the run's parameters
@@ -84,6 +85,13 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
              for name, text in _BALL_VARS.items()}
     data |= {name: ("event", getattr(run, name), {"long_name": text})
              for name, text in _EVENT_VARS.items()}
+    if run.sensor_balls.size:
+        coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
+                   "side": ("side", ["towards ball 1", "away from ball 1"])}
+        data["sensor_force"] = (("sample", "sensor", "side"), run.sensor_force,
+                                {"long_name": "contact force on each side of a sensor ball"})
+        data["sensor_mean_force"] = (("sample", "sensor"), run.sensor_force.mean(axis=2),
+                                     {"long_name": "mean of the two: what a sensor measures"})
     for name, (_dims, _values, meta) in data.items():
         if name not in ("event_contact", "event_kind"):  # numbers, not quantities
             meta["units"] = _UNITS

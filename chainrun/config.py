@@ -54,6 +54,7 @@ from pydantic import (
     ValidationError,
     ValidationInfo,
     field_validator,
+    model_validator,
 )
 from pydantic_core import PydanticCustomError
 
@@ -79,6 +80,9 @@ class RunSpec:
     t_end : float or None
     rtol : float
     max_events : int or None
+    sensors : tuple of int
+        Balls (numbered from 1) whose contact forces are sampled every ``sensor_dt``.
+    sensor_dt : float or None
     overrides : dict
         The swept keys and their values for this run, e.g. ``{"chain.k": 2}``.
     config : dict
@@ -104,6 +108,8 @@ class RunSpec:
     config: dict[str, Any] = field(default_factory=dict)
     config_hash: str = ""
     source_text: str = ""
+    sensors: tuple[int, ...] = ()
+    sensor_dt: float | None = None
 
 
 __all__ = [
@@ -346,11 +352,47 @@ def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Is
 
 
 class Output(BaseModel):
-    """What to record: snapshot times, a list or a ``{start, stop, step}`` range."""
+    """What to record: snapshot times, a list or a ``{start, stop, step}`` range, and
+    force sensors: balls whose contact forces are sampled every ``sensor_dt``."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     times: tuple[float, ...] = ()
+    sensors: tuple[int, ...] = ()
+    sensor_dt: _OptFloat = Field(None, gt=0)
+
+    @field_validator("sensors", mode="before")
+    @classmethod
+    def _sensors(cls, value: Any) -> tuple[int, ...]:
+        if not isinstance(value, (list, tuple)):
+            raise _fail([_Issue(f"expected a list of ball numbers, got {_show(value)}")])
+        issues: list[_Issue] = []
+        balls: list[int] = []
+        for position, item in enumerate(value):
+            try:
+                ball = _check_int(item)
+            except PydanticCustomError as exc:
+                issues.extend(i._replace(reason=f"{i.reason} at position {position}")
+                              for i in exc.context["issues"])
+                continue
+            if ball < 1:
+                issues.append(_Issue(f"must be a ball number >= 1, got {ball} at position "
+                                     f"{position}"))
+            elif ball in balls:
+                issues.append(_Issue(f"ball {ball} is listed twice (position {position})"))
+            balls.append(ball)
+        if issues:
+            raise _fail(issues)
+        return tuple(balls)
+
+    @model_validator(mode="after")
+    def _sensors_and_interval(self) -> "Output":
+        if self.sensors and self.sensor_dt is None:
+            raise _fail([_Issue("required with output.sensors (the sampling interval)",
+                                ("sensor_dt",))])
+        if self.sensor_dt is not None and not self.sensors:
+            raise _fail([_Issue("given without output.sensors", ("sensor_dt",))])
+        return self
 
     @field_validator("times", mode="before")
     @classmethod
@@ -482,14 +524,14 @@ def _canonical_json(config: dict[str, Any], times_json: str) -> str:
     """``json.dumps(config, sort_keys=True, separators=(",", ":"))``, with the (long) list
     ``config["output"]["times"]`` given already serialised as ``times_json``.
 
-    A quote inside a JSON string is always escaped, so ``"output":{"times":[]}`` can
-    only occur as the real key.
+    A quote inside a JSON string is always escaped, and no other table has a key
+    ``times``, so ``"times":[]`` can only occur as the real key.
     """
     stub = {**config, "output": {**config["output"], "times": []}}
     text = json.dumps(stub, sort_keys=True, separators=(",", ":"))
-    marker = '"output":{"times":[]}'
+    marker = '"times":[]'
     assert text.count(marker) == 1
-    return text.replace(marker, f'"output":{{"times":{times_json}}}')
+    return text.replace(marker, f'"times":{times_json}')
 
 
 class Experiment(BaseModel):
@@ -568,7 +610,9 @@ class Experiment(BaseModel):
             "name": self.name,
             "description": self.description,
             "chain": self.chain.model_dump(),
-            "output": {"times": list(self.output.times)},
+            "output": {"times": list(self.output.times), **(
+                {"sensors": list(self.output.sensors), "sensor_dt": self.output.sensor_dt}
+                if self.output.sensors else {})},
             "solver": self.solver.model_dump(),
         }
 
@@ -602,6 +646,8 @@ class Experiment(BaseModel):
                 chain = Chain.model_validate(data["chain"])
             except ValidationError as exc:
                 problems += _translate(exc, ("chain",))
+            else:
+                problems += _sensors_beyond_n(self.output.sensors, chain.n)
             try:
                 solver = SolverSettings.model_validate(data["solver"])
             except ValidationError as exc:
@@ -625,6 +671,8 @@ class Experiment(BaseModel):
                     t_end=solver.t_end,
                     rtol=solver.rtol,
                     max_events=solver.max_events,
+                    sensors=self.output.sensors,
+                    sensor_dt=self.output.sensor_dt,
                     overrides=overrides,
                     config=config,
                     config_hash=hashlib.sha256(canonical.encode()).hexdigest(),
@@ -640,6 +688,16 @@ _MODEL_AT: dict[tuple[str, ...], type[BaseModel]] = {
     ("output",): Output,
     ("solver",): SolverSettings,
 }
+
+
+def _sensors_beyond_n(sensors: tuple[int, ...], n: int) -> list[_Problem]:
+    """The problem of sensor balls that the chain does not have."""
+    beyond = [(i, b) for i, b in enumerate(sensors) if b > n]
+    if not beyond:
+        return []
+    i, b = beyond[0]
+    return [_Problem("output.sensors", f"ball {b} (position {i}) is beyond chain.n ({n})",
+                     frozenset({"chain.n"}))]
 
 
 def _times_after_t_end(times: tuple[float, ...], t_end: float | None) -> list[_Problem]:
@@ -771,6 +829,14 @@ def _validate(data: Any, source: str) -> Experiment:
                 pass  # reported above
             else:
                 problems += _times_after_t_end(output.times, t_end)
+        chain = merged.get("chain")
+        if output is not None and output.sensors and isinstance(chain, Mapping):
+            try:
+                n = Chain.model_validate(chain).n
+            except ValidationError:
+                pass  # reported above
+            else:
+                problems += _sensors_beyond_n(output.sensors, n)
         if not problems:
             continue
         label = _label(overrides)

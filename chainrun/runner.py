@@ -193,6 +193,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         sol = simulate(
             spec.n, spec.k, spec.alpha, spec.times, t_end=spec.t_end, rtol=spec.rtol,
             max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
+            sensors=spec.sensors, sensor_dt=spec.sensor_dt,
         )
         writer.finish(sol)
     d = sol.diagnostics

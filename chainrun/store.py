@@ -633,6 +633,21 @@ class RunWriter:
         for key, value in dataclasses.asdict(sol.diagnostics).items():
             diag.attrs[key] = value
 
+        balls = np.asarray(sol.sensor_balls, dtype=np.int64).reshape(-1)
+        if balls.size:
+            sensors = _group(h5, "sensors")
+            sample = _scale(sensors, "time", np.asarray(sol.sensor_time, dtype=np.float64),
+                            "sample time: 0, dt, 2 dt, ... up to end_time")
+            sensor = _scale(sensors, "ball", balls, "sensor ball number (1..N)")
+            force = np.asarray(sol.sensor_force, dtype=np.float64)
+            side = _scale(sensors, "side", np.array([0, 1], dtype=np.int64),
+                          "0: the contact towards ball 1; 1: the contact away from it")
+            _array(sensors, "force", force, [sample, sensor, side],
+                   "contact force on each side of the sensor ball (0 at a line's end)")
+            _array(sensors, "mean_force", force.mean(axis=2), [sample, sensor],
+                   "mean of the two contact forces: what a sensor inside the ball measures")
+            sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
+
     def abort(self) -> None:
         """Close and delete the temporary file; nothing is written under ``path``."""
         h5, self._h5 = self._h5, None
@@ -754,6 +769,11 @@ class RunData:
     terminal : bool
     diagnostics : dict
         The fields of ``chainrun.solver.Diagnostics``.
+    sensor_balls : ndarray of int64, shape (S,)
+        Force sensor balls (1..N); empty without sensors.
+    sensor_time : ndarray, shape (M,)
+    sensor_force : ndarray, shape (M, S, 2)
+        Contact forces on each side of each sensor ball at each sample time.
     """
 
     path: Path
@@ -778,6 +798,10 @@ class RunData:
     end_time: float
     terminal: bool
     diagnostics: dict[str, Any]
+    sensor_balls: np.ndarray = dataclasses.field(
+        default_factory=lambda: np.zeros(0, np.int64))
+    sensor_time: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    sensor_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0, 2)))
 
     @property
     def n(self) -> int:
@@ -874,7 +898,17 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         end_time=float(_attr(res, "end_time")),
         terminal=bool(_attr(res, "terminal")),
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
+        **_read_sensors(h5),
     )
+
+
+def _read_sensors(h5: h5py.File) -> dict:
+    """The force sensors' samples, if the run had sensors (an optional group)."""
+    if "sensors" not in h5:
+        return {}
+    group = h5["sensors"]
+    return dict(sensor_balls=_get(group, "ball")[()], sensor_time=_get(group, "time")[()],
+                sensor_force=_get(group, "force")[()])
 
 
 # --------------------------------------------------------------------- index files

@@ -65,6 +65,8 @@ class RunSummary:
     left_behind: int
     energy: dict[str, float]
     snapshots: int
+    sensors: int
+    samples: int
     first_time: float
     last_time: float
     file_bytes: int
@@ -110,6 +112,8 @@ def summarize(run) -> RunSummary:
         left_behind=int(behind.sum()),
         energy={**kinetic, "contacts": stored},
         snapshots=int(run.times.size),
+        sensors=int(run.sensor_balls.size),
+        samples=int(run.sensor_time.size),
         first_time=float(run.times[0]) if run.times.size else float("nan"),
         last_time=float(run.times[-1]) if run.times.size else float("nan"),
         file_bytes=os.path.getsize(run.path),

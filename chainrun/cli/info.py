@@ -54,7 +54,8 @@ def render(s) -> str:
         f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
         f"{share['ejected']:.2%}, left behind {share['left behind']:.2%}, in contacts "
         f"{share['contacts']:.2%}",
-        f"stored    {stored}; the event log; final and separation velocities",
+        f"stored    {stored}; the event log; final and separation velocities"
+        + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
     ]
     return "\n".join(lines)
 

@@ -52,7 +52,9 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
       "chain.k" = [1, 2, 3, 4]
 
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
-    rtol (accuracy, default 1e-12), max_events.
+    rtol (accuracy, default 1e-12), max_events. Optional [output] keys besides
+    times: sensors (ball numbers) and sensor_dt, to sample the contact forces on
+    those balls every sensor_dt.
 
     Sweeps resume: a run whose file already holds the same config is skipped, so
     after an interruption the same command computes only what is missing. A file

@@ -133,6 +133,14 @@ class Solution:
     positions, velocities : ndarray, shape (T, N), or None
         Snapshots, when no ``on_snapshot`` observer consumed them.
     diagnostics : Diagnostics
+    sensor_balls : ndarray of int64, shape (S,)
+        The sensor balls, numbered from 1 (empty without sensors).
+    sensor_time : ndarray, shape (M,)
+        The sample times: 0, dt, 2 dt, ... up to ``end_time``.
+    sensor_force : ndarray, shape (M, S, 2)
+        The contact forces on each sensor ball at each sample, on its side towards
+        ball 1 and on its far side (0 at the line's ends); an embedded sensor measures
+        their mean. Exact at each sample, from the step that contains it.
     """
 
     n: int
@@ -153,6 +161,11 @@ class Solution:
     positions: np.ndarray | None
     velocities: np.ndarray | None
     diagnostics: Diagnostics = field(repr=False)
+    sensor_balls: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64),
+                                     repr=False)
+    sensor_time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    sensor_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)),
+                                     repr=False)
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a
@@ -190,6 +203,8 @@ def simulate(
     max_events: int | None = None,
     on_snapshot: SnapshotHook | None = None,
     on_progress: ProgressHook | None = None,
+    sensors=(),
+    sensor_dt: float | None = None,
 ) -> Solution:
     """Run one line of balls to its terminal state (or to ``t_end``).
 
@@ -215,6 +230,12 @@ def simulate(
         the call); when given, ``Solution.positions`` and ``velocities`` are None.
     on_progress : callable(t), optional
         Called between output times and periodically during long stretches.
+    sensors : sequence of int, optional
+        Balls (numbered from 1) whose contact forces are sampled every ``sensor_dt``
+        from t = 0 to the end of the run (``Solution.sensor_force``), exactly, from
+        the step containing each sample; the cost grows with the samples, not with N.
+    sensor_dt : float, optional
+        The sampling interval, > 0; required with ``sensors``.
 
     Returns
     -------
@@ -224,7 +245,8 @@ def simulate(
 
     return run(
         n, k, alpha, times, t_end=t_end, rtol=rtol, max_events=max_events,
-        on_snapshot=on_snapshot, on_progress=on_progress,
+        on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
+        sensor_dt=sensor_dt,
     )
 
 

@@ -21,7 +21,7 @@ from chainrun.solver import (
     velocity_floor,
 )
 from chainrun.solver import _jit, _loop, _state
-from chainrun.solver.physics import kinetic_energy, momentum, potential_energy
+from chainrun.solver.physics import contact_forces, kinetic_energy, momentum, potential_energy
 
 _EVENT_BUFFER = 1 << 16
 _INITIAL_WINDOW = 256
@@ -44,6 +44,7 @@ def load_kernels(S: _state.State | None = None) -> None:
         S = _new_state(2, 1, 1.5, DEFAULT_RTOL, None, None)
     _jit.prepare(_loop.advance, S)
     _jit.prepare(_loop._snapshot, S, 0.0)
+    _jit.prepare(_loop._sample, S, 0.0, np.zeros(1, np.int64), np.zeros(1))
 
 
 def release_compression(alpha: float, floor: float) -> float:
@@ -144,10 +145,56 @@ def _grow(S: _state.State, need: int) -> _state.State:
     return S._replace(**window)
 
 
+def _check_sensors(sensors, sensor_dt, n):
+    balls = np.asarray(sensors, dtype=np.int64).reshape(-1)
+    if balls.size == 0:
+        return balls, None
+    if np.any(balls < 1) or np.any(balls > n) or np.unique(balls).size != balls.size:
+        raise ValueError(f"sensors must be distinct ball numbers within 1..{n}, "
+                         f"got {balls.tolist()}")
+    if sensor_dt is None or not (math.isfinite(sensor_dt) and sensor_dt > 0):
+        raise ValueError(f"sensor_dt must be a finite number > 0 with sensors, "
+                         f"got {sensor_dt!r}")
+    return balls, float(sensor_dt)
+
+
+class _Sensors:
+    """The samples of the sensor balls' neighbourhoods: positions of balls b-1, b, b+1
+    at t = 0, dt, 2 dt, ..., turned into the contact forces on each side of b."""
+
+    def __init__(self, balls, dt, n, alpha):
+        self.balls, self.dt, self.n, self.alpha = balls, dt, n, alpha
+        near = np.concatenate([balls - 2, balls - 1, balls])  # 0-based b-1, b, b+1
+        self.probe = np.unique(near[(near >= 0) & (near < n)]).astype(np.int64)
+        self.buffer = np.empty(self.probe.size)
+        self.times, self.rows = [], []
+        self.count = 0
+
+    def next_time(self):
+        return self.count * self.dt if self.balls.size else math.inf
+
+    def take(self, t, positions):
+        self.times.append(t)
+        self.rows.append(np.array(positions, dtype=float))
+        self.count += 1
+
+    def forces(self):
+        x = np.array(self.rows).reshape(len(self.rows), self.probe.size)
+        where = {int(b): i for i, b in enumerate(self.probe)}
+        out = np.zeros((x.shape[0], self.balls.size, 2))
+        for s, ball in enumerate(self.balls - 1):
+            for side, (a, b) in enumerate(((ball - 1, ball), (ball, ball + 1))):
+                if a >= 0 and b < self.n:
+                    out[:, s, side] = contact_forces(
+                        np.stack([x[:, where[a]], x[:, where[b]]], axis=-1), self.alpha)[:, 0]
+        return np.array(self.times), out
+
+
 def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
-        on_snapshot=None, on_progress=None) -> Solution:
+        on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None) -> Solution:
     """See ``chainrun.solver.simulate``."""
     n, k, alpha, times = _check_inputs(n, k, alpha, times, t_end, rtol, max_events)
+    sensor_balls, sensor_dt = _check_sensors(sensors, sensor_dt, n)
     S = _new_state(n, k, alpha, rtol, t_end, max_events)
     load_kernels(S)
     wall0 = time.perf_counter()
@@ -172,18 +219,40 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         ev_k.append(S.ev_k[:m].copy())
         S.ints[_state.I_NEV] = 0
 
+    sensing = _Sensors(sensor_balls, sensor_dt, n, alpha)
     nout = 0
-    if nt:
-        S.fs[_state.F_TOUT] = times[0]
-        S.ints[_state.I_HAVEOUT] = 1
+
+    def request():
+        """Ask the kernel for the next snapshot (1) or sensor sample (2), the earlier."""
+        t_snap = times[nout] if nout < nt else math.inf
+        t_sample = sensing.next_time()
+        if t_sample > S.fs[_state.F_TEND]:
+            t_sample = math.inf
+        if t_snap == math.inf and t_sample == math.inf:
+            S.ints[_state.I_HAVEOUT] = 0
+        elif t_snap <= t_sample:
+            S.fs[_state.F_TOUT] = t_snap
+            S.ints[_state.I_HAVEOUT] = 1
+        else:
+            S.fs[_state.F_TOUT] = t_sample
+            S.ints[_state.I_HAVEOUT] = 2
+
+    request()
     while True:
+        kind = int(S.ints[_state.I_HAVEOUT])
         status = _loop.advance(S)
         if status == _state.ST_OUTPUT:
-            emit(nout, times[nout])
-            nout += 1
-            if nout < nt:
-                S.fs[_state.F_TOUT] = times[nout]
-                S.ints[_state.I_HAVEOUT] = 1
+            tout = float(S.fs[_state.F_TOUT])
+            if kind == 1:
+                emit(nout, times[nout])
+                nout += 1
+            if tout == sensing.next_time():
+                if kind == 1:
+                    sensing.take(tout, S.ox[sensing.probe])
+                else:
+                    _loop._sample(S, tout, sensing.probe, sensing.buffer)
+                    sensing.take(tout, sensing.buffer)
+            request()
             if on_progress is not None:
                 on_progress(float(S.fs[_state.F_T]))
         elif status == _state.ST_FLUSH:
@@ -209,6 +278,11 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         _loop._snapshot(S, times[nout])
         emit(nout, times[nout])
         nout += 1
+    # samples up to the end of the run (its last instant included)
+    while sensing.next_time() <= t_final:
+        _loop._sample(S, sensing.next_time(), sensing.probe, sensing.buffer)
+        sensing.take(sensing.next_time(), sensing.buffer)
+    sensor_time, sensor_force = sensing.forces()
     _loop._snapshot(S, t_final)
     x_final = S.ox.copy()
     v_final = S.ov.copy()
@@ -239,7 +313,8 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         event_time=event_time, event_contact=np.concatenate(ev_j),
         event_kind=np.concatenate(ev_k),
         times=times, positions=positions, velocities=velocities,
-        diagnostics=diagnostics,
+        diagnostics=diagnostics, sensor_balls=sensor_balls, sensor_time=sensor_time,
+        sensor_force=sensor_force,
     )
 
 

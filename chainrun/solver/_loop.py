@@ -29,7 +29,9 @@ from chainrun.solver._state import (
     ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
     ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _tw,
 )
-from chainrun.solver._steppers import _ball_now, _dense, _poly, _step, _taylor, _taylor_at
+from chainrun.solver._steppers import (
+    _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at,
+)
 
 
 @kernel
@@ -48,33 +50,49 @@ def _restore_start(S):
         S.A[p] = S.A0[p]
 
 
+@kernel(inline="always")
+def _output_phase(S, tout):
+    """Where tout falls in the last step, as a fraction of it (1: at or after its end,
+    or the balls flew freely since)."""
+    t = S.fs[F_T]
+    hl = S.fs[F_HLAST]
+    if tout < t and S.ints[I_JUMP] == 0 and hl > 0.0:
+        return max((tout - S.fs[F_TPREV]) / hl, 0.0)
+    return 1.0
+
+
+@kernel(inline="always")
+def _state_at(S, b, tout, th):
+    """(x, v) of ball b at tout, th = _output_phase(S, tout): from the last step's
+    series or interpolant (built for this ball if need be), or in free flight."""
+    p = S.bmap[b]
+    if p >= 0:
+        if th >= 1.0:
+            return S.X[p], S.V[p]
+        if S.ints[I_TAY] == 1:
+            return _taylor_at(S, p, th * S.fs[F_HLAST])
+        _dense_at(S, p)
+        return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
+    return S.bx[b] + S.bv[b] * (tout - S.bt[b]), S.bv[b]
+
+
 @entry
 def _snapshot(S, tout):
     """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
-    t = S.fs[F_T]
-    tp = S.fs[F_TPREV]
-    hl = S.fs[F_HLAST]
-    th = 1.0
-    if tout < t and S.ints[I_JUMP] == 0 and hl > 0.0:
-        th = (tout - tp) / hl
-        if th < 0.0:
-            th = 0.0
-        if S.ints[I_TAY] == 0:
-            _dense(S)
+    th = _output_phase(S, tout)
+    if th < 1.0 and S.ints[I_TAY] == 0:
+        _dense(S)  # the whole window's interpolant at once
     for b in range(S.bx.shape[0]):
-        p = S.bmap[b]
-        if p >= 0:
-            if th >= 1.0:
-                S.ox[b] = S.X[p]
-                S.ov[b] = S.V[p]
-            elif S.ints[I_TAY] == 1:
-                S.ox[b], S.ov[b] = _taylor_at(S, p, th * hl)
-            else:
-                S.ox[b] = _poly(S.FX, S.X0[p], p, th)
-                S.ov[b] = _poly(S.FV, S.V0[p], p, th)
-        else:
-            S.ox[b] = S.bx[b] + S.bv[b] * (tout - S.bt[b])
-            S.ov[b] = S.bv[b]
+        S.ox[b], S.ov[b] = _state_at(S, b, tout, th)
+
+
+@entry
+def _sample(S, tout, balls, xs):
+    """Positions at tout of the balls listed (0-based) into xs: a snapshot of those
+    balls alone, at a cost in their number, not in N."""
+    th = _output_phase(S, tout)
+    for i in range(balls.shape[0]):
+        xs[i] = _state_at(S, balls[i], tout, th)[0]
 
 
 @kernel
@@ -294,7 +312,7 @@ def advance(S):
     """Run until something needs the driver; return a status code (ST_*).
 
     The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
-    snapshot, empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW
+    snapshot (2 for a sample of a few balls, which it then takes with ``_sample``), empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW
     and calls again.
     """
     nsteps = 0
@@ -306,8 +324,10 @@ def advance(S):
                 return ST_GROW
         t = S.fs[F_T]
         # snapshots inside the last step, before its event reshapes the clusters
-        if S.ints[I_HAVEOUT] == 1 and S.fs[F_TOUT] <= t:
-            _snapshot(S, S.fs[F_TOUT])
+        # (I_HAVEOUT 2: a sample of a few balls, which the driver takes with _sample)
+        if S.ints[I_HAVEOUT] != 0 and S.fs[F_TOUT] <= t:
+            if S.ints[I_HAVEOUT] == 1:
+                _snapshot(S, S.fs[F_TOUT])
             S.ints[I_HAVEOUT] = 0
             return ST_OUTPUT
         if S.ints[I_POST] == 1:
