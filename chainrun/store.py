@@ -807,6 +807,11 @@ class RunData:
     def n(self) -> int:
         return self.parameters["n"]
 
+    def contact_forces(self, key=slice(None)) -> np.ndarray:
+        """Contact forces ``c_+^alpha`` of the snapshots ``key`` (an index or slice of
+        times), shape (T', N - 1), from the stored positions."""
+        return physics.contact_forces(np.atleast_2d(self.positions[key]), self.alpha)
+
     @property
     def k(self) -> int:
         return self.parameters["k"]

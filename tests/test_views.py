@@ -32,6 +32,7 @@ def wave(tmp_path_factory):
     path = simulate_text(tmp_path_factory.mktemp("views"), WAVE) / "run.h5"
     with h5py.File(path) as f:
         raw = dict(v=f["particles/chain/velocity/value"][:, :, 0],
+                   x=f["particles/chain/position/value"][:, :, 0],
                    t=f["particles/chain/velocity/time"][()],
                    final=f["results/final_velocity"][()],
                    kinetic=f["observables/kinetic_energy/value"][()],
@@ -85,7 +86,8 @@ def test_plot_writes_every_view_the_same_bytes_twice(wave, tmp_path):
     path, _ = wave
     first = render_run(path, out=tmp_path / "a")
     second = render_run(path, out=tmp_path / "b")
-    assert [p.name for p in first] == [f"run-{v}{s}" for v in VIEWS for s in (".png", ".pdf")]
+    drawn = [v for v in VIEWS if v != "sensors"]  # the run has no sensors
+    assert [p.name for p in first] == [f"run-{v}{s}" for v in drawn for s in (".png", ".pdf")]
     digest = [hashlib.sha256(p.read_bytes()).digest() for p in first]
     assert digest == [hashlib.sha256(p.read_bytes()).digest() for p in second]
 
@@ -137,3 +139,43 @@ def test_an_artefact_name_is_an_artefact_even_beside_a_folder_of_that_name(tmp_p
     result = CliRunner().invoke(main, ["plot", "fig05", "--results", str(tmp_path / "r")])
     assert result.exit_code == 2
     assert "chainrun analyze fig05" in result.stderr  # the artefact's own message
+
+
+def test_the_force_image_and_displacements_are_the_files(wave):
+    path, raw = wave
+    run = read_run(path)
+    with style():
+        forces = draw_view(run, "forces")
+        displacements = draw_view(run, "displacements")
+    c = raw["x"][:, :-1] - raw["x"][:, 1:]
+    expected = np.where(c > 0, np.abs(c) ** 1.5, 0.0)  # Hertz: c_+^(3/2)
+    np.testing.assert_allclose(artist(forces, "force").get_array(), expected.T, rtol=1e-14,
+                               atol=0)
+    lines = [a for a in displacements.axes[0].get_lines()
+             if str(a.get_gid()).startswith("displacement/")]
+    for a in lines:
+        np.testing.assert_array_equal(a.get_ydata(), raw["x"][int(a.get_gid().split("/")[1])])
+
+
+def test_the_sensor_view_is_the_mean_force_stored(tmp_path):
+    out = simulate_text(tmp_path, """name = "s"
+[chain]
+n = 12
+k = 1
+alpha = 1.5
+[output]
+sensors = [4, 9]
+sensor_dt = 0.05
+""")
+    with h5py.File(out / "run.h5") as f:
+        mean = f["sensors/mean_force"][()]
+        t = f["sensors/time"][()]
+    with style():
+        figure = draw_view(read_run(out / "run.h5"), "sensors")
+    for s, ball in enumerate((4, 9)):
+        line = artist(figure, f"sensor/{ball}")
+        np.testing.assert_array_equal(line.get_xdata(), t)
+        np.testing.assert_array_equal(line.get_ydata(), mean[:, s])
+    written = render_run(out / "run.h5", out=tmp_path / "fig")
+    assert sorted(p.name for p in written) == [
+        "run-final.pdf", "run-final.png", "run-sensors.pdf", "run-sensors.png"]

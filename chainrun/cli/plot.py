@@ -24,11 +24,12 @@ from chainrun.errors import ChainrunError
               default=Path("results"), show_default=True,
               help="Results folder: analysis files are read from RESULTS/analysis/, outputs "
                    "written under RESULTS/.")
-@click.option("--what", default=",".join(("spacetime", "profiles", "final", "energy")),
-              show_default=True, metavar="VIEWS",
+@click.option("--what", default=None, metavar="VIEWS",
               help="For a run file or folder: the views to draw, comma-separated: spacetime "
-                   "(velocity over ball and time), profiles (velocity along the line at "
-                   "some snapshot times), final (final velocity of each ball), energy.")
+                   "(velocity over ball and time), forces (contact force over contact and "
+                   "time), profiles and displacements (along the line at some snapshot "
+                   "times), final (final velocity of each ball), energy, sensors (the force "
+                   "sensors' traces) [default: every view the run has data for].")
 @click.option("--log", is_flag=True,
               help="For a run file or folder: final velocities on a (symmetric) log scale.")
 @click.option("--balls", default="1,-1", show_default=True, metavar="NUMBERS",
@@ -44,9 +45,10 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     views of run files and output folders NAMES.
 
     A NAME that is a run file (or an output folder of run files) gets its views,
-    drawn from the file alone: a space-time diagram of the velocity, velocity
-    profiles at snapshot times, the final velocities and the energy over time, each as
-    PNG and PDF (--what picks them); an output folder of a sweep also gets its final
+    drawn from the file alone: space-time diagrams of the velocity and of the contact
+    forces, velocity and displacement profiles at snapshot times, the final
+    velocities, the energy over time and the force sensors' traces, each as PNG and
+    PDF (--what picks them); an output folder of a sweep also gets its final
     velocities against each swept key (sweep-final.png, --balls picks the balls).
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
@@ -87,7 +89,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
 
     known = {a.name for a in artefacts.ARTEFACTS}
     if names and all(name not in known and Path(name).exists() for name in names):
-        views = [v.strip() for v in what.split(",") if v.strip()]
+        views = None if what is None else [v.strip() for v in what.split(",") if v.strip()]
         try:
             numbers = [int(b) for b in balls.split(",") if b.strip()]
         except ValueError:

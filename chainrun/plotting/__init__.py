@@ -108,7 +108,8 @@ def _save(figure, outputs: list[Path]) -> None:
 
 
 def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
-    """Draw the standard views (``views.VIEWS``) of the run file at ``path``.
+    """Draw the standard views (``views.VIEWS``; by default every one the run has data
+    for) of the run file at ``path``.
 
     Each view goes to ``<out>/<run file stem>-<view>.png`` and ``.pdf``; ``out``
     defaults to a ``figures`` folder beside the run file. Returns the files written.
@@ -124,7 +125,10 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
 
     path = Path(path)
     run = read_run(path)
-    views = VIEWS if views is None else tuple(views)
+    if views is None:  # every view the run has data for
+        views = [v for v in VIEWS if v == "final"
+                 or (v == "sensors" and run.sensor_balls.size)
+                 or (v != "sensors" and run.times.size >= 2)]
     out = path.parent / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []

@@ -1,9 +1,10 @@
 """Standard views of any run file, drawn from what the file stores and nothing else.
 
 ``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
-wave front shows), ``profiles`` (velocity along the line at some snapshot times),
-``final`` (final velocity of every ball) and ``energy`` (kinetic, contact and total
-energy over time). ``draw_sweep`` draws a sweep's final velocities against its swept
+wave front shows), ``forces`` (contact force over contact and time), ``profiles`` and
+``displacements`` (velocity and displacement along the line at some snapshot times),
+``final`` (final velocity of every ball), ``energy`` (kinetic, contact and total energy
+over time) and ``sensors`` (the force sensors' traces). ``draw_sweep`` draws a sweep's final velocities against its swept
 keys. Each artist carries a ``gid`` naming the array it shows, so tests can match what
 is drawn with the file.
 """
@@ -18,7 +19,7 @@ from chainrun.plotting.common import MARKERS
 
 __all__ = ["VIEWS", "draw_sweep", "draw_view"]
 
-VIEWS = ("spacetime", "profiles", "final", "energy")
+VIEWS = ("spacetime", "forces", "profiles", "displacements", "final", "energy", "sensors")
 #: an image wider than this many balls shows every s-th ball (the file is read so)
 MAX_IMAGE_BALLS = 2000
 #: profiles drawn at most
@@ -47,15 +48,50 @@ def _spacetime(run, figure: Figure, axes) -> None:
     axes.set_ylabel("ball" + (f" (every {stride}th)" if stride > 1 else ""))
 
 
-def _profiles(run, figure: Figure, axes) -> None:
-    _snapshots_needed(run, "profiles", 1)
+def _forces(run, figure: Figure, axes) -> None:
+    _snapshots_needed(run, "forces", 2)
+    if run.n < 2:
+        raise ChainrunError(f"{run.path}: a line of one ball has no contacts")
+    stride = -(-(run.n - 1) // MAX_IMAGE_BALLS)
+    force = run.contact_forces()[:, ::stride]
+    contacts = np.arange(1, run.n)[::stride]
+    image = axes.imshow(force.T, origin="lower", aspect="auto", cmap="magma_r",
+                        vmin=0.0, interpolation="nearest",
+                        extent=(run.times[0], run.times[-1], contacts[0] - 0.5,
+                                contacts[-1] + stride - 0.5), gid="force")
+    figure.colorbar(image, ax=axes, label=f"contact force ({_UNITS})")
+    axes.set_xlabel(f"time ({_UNITS})")
+    axes.set_ylabel("contact j (balls j, j+1)" + (f", every {stride}th" if stride > 1 else ""))
+
+
+def _along_the_line(run, figure: Figure, axes, name: str, data, label: str) -> None:
+    _snapshots_needed(run, name, 1)
     picks = np.unique(np.linspace(0, run.times.size - 1, MAX_PROFILES).round().astype(int))
     balls = np.arange(1, run.n + 1)
     for i in picks:
-        t = run.times[i]
-        axes.plot(balls, run.velocities[i], label=f"t = {t:.4g}", gid=f"velocity/{i}")
+        axes.plot(balls, data[i], label=f"t = {run.times[i]:.4g}", gid=f"{name}/{i}")
     axes.set_xlabel("ball")
-    axes.set_ylabel(f"velocity ({_UNITS})")
+    axes.set_ylabel(f"{label} ({_UNITS})")
+    axes.legend(fontsize="small")
+
+
+def _profiles(run, figure: Figure, axes) -> None:
+    _along_the_line(run, figure, axes, "velocity", run.velocities, "velocity")
+
+
+def _displacements(run, figure: Figure, axes) -> None:
+    _along_the_line(run, figure, axes, "displacement", run.positions, "displacement")
+
+
+def _sensors(run, figure: Figure, axes) -> None:
+    if run.sensor_balls.size == 0:
+        raise ChainrunError(f"{run.path}: no force sensors (set output.sensors and "
+                            "output.sensor_dt in the experiment)")
+    for s, ball in enumerate(run.sensor_balls):
+        axes.plot(run.sensor_time, run.sensor_force[:, s, :].mean(axis=1),
+                  label=f"ball {ball}", gid=f"sensor/{ball}")
+    axes.set_xlabel(f"time ({_UNITS})")
+    axes.set_ylabel(f"mean contact force on the ball ({_UNITS})")
     axes.legend(fontsize="small")
 
 
@@ -99,7 +135,8 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
     if view == "final":
         _final(run, figure, axes, log)
     else:
-        {"spacetime": _spacetime, "profiles": _profiles, "energy": _energy}[view](
+        {"spacetime": _spacetime, "forces": _forces, "profiles": _profiles,
+         "displacements": _displacements, "energy": _energy, "sensors": _sensors}[view](
             run, figure, axes)
     experiment = run.parameters.get("experiment", "")
     run_id = run.parameters.get("run_id", "")
