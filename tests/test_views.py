@@ -125,9 +125,18 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
         np.testing.assert_array_equal(line.get_xdata(), [1, 2, 3, 4])
         np.testing.assert_array_equal(line.get_ydata(), [finals[k][column] for k in (1, 2, 3, 4)])
     assert figure.axes[0].get_xlabel() == "chain.k"
+    from chainrun.plotting.views import draw_sweep_runs
+
+    with style():
+        panels = draw_sweep_runs([read_run(out / row["file"]) for row in rows])
+    assert [ax.get_title() for ax in panels.axes] == ["k=1", "k=2", "k=3", "k=4"]
+    for k, ax in enumerate(panels.axes, start=1):
+        (line,) = [a for a in ax.get_lines() if a.get_gid() == f"final_velocity/k={k}"]
+        np.testing.assert_array_equal(line.get_ydata(), finals[k])
     result = runner.invoke(main, ["plot", str(out), "--what", "final", "--balls", "1,-1"])
     assert result.exit_code == 0, result.output
     assert (out / "figures" / "sweep-final.png").is_file()
+    assert (out / "figures" / "sweep-runs.png").is_file()
     result = runner.invoke(main, ["plot", str(out), "--balls", "first"])
     assert result.exit_code == 2 and "--balls 'first'" in result.stderr
 

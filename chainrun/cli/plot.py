@@ -49,7 +49,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     forces, velocity and displacement profiles at snapshot times, the final
     velocities, the energy over time and the force sensors' traces, each as PNG and
     PDF (--what picks them); an output folder of a sweep also gets its final
-    velocities against each swept key (sweep-final.png, --balls picks the balls).
+    velocities against each swept key (sweep-final.png, --balls picks the balls) and
+    a panel per run (sweep-runs.png).
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -105,7 +106,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                     paths = render_run(path, views, out=out, log=log)
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
                 if folder.is_dir() and len(files) > 1 and (folder / "index.h5").is_file():
-                    paths = render_sweep(folder, numbers, out=out)
+                    paths = render_sweep(folder, numbers, out=out, log=log)
                     click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
             except ChainrunError as exc:
                 fail(str(exc))

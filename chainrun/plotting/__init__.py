@@ -140,18 +140,22 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
     return written
 
 
-def render_sweep(folder, balls=(1, -1), *, out=None) -> list[Path]:
-    """Draw the final velocities of ``balls`` against each swept key of the sweep in
-    ``folder`` (its index.h5) into ``<out>/sweep-final.png`` and ``.pdf`` (``out``
-    defaults to ``folder/figures``). Returns the files written."""
-    from chainrun.plotting.views import draw_sweep
+def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False) -> list[Path]:
+    """Draw the sweep in ``folder`` (its index.h5): the final velocities of ``balls``
+    against each swept key (``sweep-final``) and a panel per run (``sweep-runs``), as
+    PNG and PDF in ``out`` (default ``folder/figures``). Returns the files written."""
+    from chainrun.plotting.views import draw_sweep, draw_sweep_runs
     from chainrun.store import read_index, read_run
 
     folder = Path(folder)
     runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
     out = folder / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    outputs = [out / f"sweep-final{suffix}" for suffix in (".png", ".pdf")]
+    written = []
     with style():
-        _save(draw_sweep(runs, balls), outputs)
-    return outputs
+        for name, figure in (("sweep-final", draw_sweep(runs, balls)),
+                             ("sweep-runs", draw_sweep_runs(runs, log=log))):
+            outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]
+            _save(figure, outputs)
+            written += outputs
+    return written

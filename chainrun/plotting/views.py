@@ -4,8 +4,8 @@
 wave front shows), ``forces`` (contact force over contact and time), ``profiles`` and
 ``displacements`` (velocity and displacement along the line at some snapshot times),
 ``final`` (final velocity of every ball), ``energy`` (kinetic, contact and total energy
-over time) and ``sensors`` (the force sensors' traces). ``draw_sweep`` draws a sweep's final velocities against its swept
-keys. Each artist carries a ``gid`` naming the array it shows, so tests can match what
+over time) and ``sensors`` (the force sensors' traces). ``draw_sweep`` draws a sweep's
+final velocities against its swept keys, ``draw_sweep_runs`` a panel per run. Each artist carries a ``gid`` naming the array it shows, so tests can match what
 is drawn with the file.
 """
 
@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
 
-__all__ = ["VIEWS", "draw_sweep", "draw_view"]
+__all__ = ["VIEWS", "draw_sweep", "draw_sweep_runs", "draw_view"]
 
 VIEWS = ("spacetime", "forces", "profiles", "displacements", "final", "energy", "sensors")
 #: an image wider than this many balls shows every s-th ball (the file is read so)
@@ -185,4 +185,27 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
         axes.legend(fontsize="small")
     experiment = runs[0].parameters.get("experiment", "")
     figure.suptitle(f"{experiment}: {len(runs)} runs", fontsize="medium")
+    return figure
+
+
+def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
+    """A panel per run of a sweep: its final velocities against ball number, titled by
+    its run id, on a grid of at most 5 columns."""
+    cols = min(5, len(runs))
+    rows = -(-len(runs) // cols)
+    figure = Figure(figsize=(2.6 * cols, 2.2 * rows), layout="constrained")
+    for i, run in enumerate(runs):
+        axes = figure.add_subplot(rows, cols, i + 1)
+        v = run.final_velocity
+        axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, color="black",
+                  linewidth=0.8, gid=f"final_velocity/{run.parameters.get('run_id', i)}")
+        axes.axhline(0.0, color="0.6", linewidth=0.5)
+        axes.set_title(str(run.parameters.get("run_id", i)), fontsize="small")
+        axes.tick_params(labelsize="x-small")
+        if log:
+            small = np.abs(v[v != 0.0])
+            axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size
+                                                    else 1.0, 1e-12))
+    figure.supxlabel("ball", fontsize="small")
+    figure.supylabel(f"final velocity ({_UNITS})", fontsize="small")
     return figure
