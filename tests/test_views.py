@@ -188,3 +188,9 @@ sensor_dt = 0.05
     written = render_run(out / "run.h5", out=tmp_path / "fig")
     assert sorted(p.name for p in written) == [
         "run-final.pdf", "run-final.png", "run-sensors.pdf", "run-sensors.png"]
+
+
+def test_strided_forces_read_only_their_balls_and_agree(wave):
+    path, _ = wave
+    run = read_run(path)
+    np.testing.assert_array_equal(run.contact_forces(4), run.contact_forces()[:, ::4])

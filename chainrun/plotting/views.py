@@ -53,7 +53,7 @@ def _forces(run, figure: Figure, axes) -> None:
     if run.n < 2:
         raise ChainrunError(f"{run.path}: a line of one ball has no contacts")
     stride = -(-(run.n - 1) // MAX_IMAGE_BALLS)
-    force = run.contact_forces()[:, ::stride]
+    force = run.contact_forces(stride)
     contacts = np.arange(1, run.n)[::stride]
     image = axes.imshow(force.T, origin="lower", aspect="auto", cmap="magma_r",
                         vmin=0.0, interpolation="nearest",
