@@ -34,6 +34,7 @@ __all__ = [
     "estimate_file_size",
     "estimate_run_memory",
     "free_disk",
+    "human_size",
     "memory_available",
 ]
 
@@ -64,7 +65,7 @@ FIXED_BYTES = 2 * (1 << 16) * 17 + 12 * (1 << 20)
 _MEMINFO = "/proc/meminfo"
 
 
-def _size(nbytes: float) -> str:
+def human_size(nbytes: float) -> str:
     """``nbytes`` for a person: ``"1.5 GB"`` (powers of 1000, like ``df -H``)."""
     for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
         if abs(nbytes) < 1000 or unit == "PB":
@@ -170,10 +171,10 @@ def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
     together = need * max(int(runs_at_once), 1)
     if available is not None and together > available:
         what = f"a run of N = {n} balls with {n_snapshots} snapshots"
-        times = "" if runs_at_once <= 1 else f" ({runs_at_once} at once: {_size(together)})"
+        times = "" if runs_at_once <= 1 else f" ({runs_at_once} at once: {human_size(together)})"
         raise ChainrunError(
-            f"{what} needs about {_size(need)} of memory{times}, "
-            f"but {_size(available)} is available"
+            f"{what} needs about {human_size(need)} of memory{times}, "
+            f"but {human_size(available)} is available"
         )
     return need
 
@@ -219,8 +220,8 @@ def _disk_warning(size: int, runs: int, folder, free: int | None) -> str | None:
     if free is None or size <= free:
         return None
     what = "the run file" if runs <= 1 else f"the {runs} run files"
-    return (f"{what} may take up to {_size(size)} before compression, "
-            f"and {_size(free)} is free in {folder}")
+    return (f"{what} may take up to {human_size(size)} before compression, "
+            f"and {human_size(free)} is free in {folder}")
 
 
 def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = None,

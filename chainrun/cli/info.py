@@ -9,14 +9,6 @@ import click
 from chainrun.cli.common import fail
 from chainrun.errors import ChainrunError
 
-def _size(nbytes: int) -> str:
-    for unit in ("B", "kB", "MB", "GB"):
-        if nbytes < 1000 or unit == "GB":
-            return f"{nbytes:.0f} {unit}" if unit == "B" else f"{nbytes:.1f} {unit}"
-        nbytes /= 1000
-    return ""
-
-
 def _events(counts: dict[str, int]) -> str:
     names = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
              "ENGAGE": "engagements"}
@@ -28,6 +20,7 @@ def _events(counts: dict[str, int]) -> str:
 def render(s) -> str:
     """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text."""
     from chainrun.analysis.summary import law_name
+    from chainrun.limits import human_size
 
     if s.terminal:
         outcome = f"terminal state at t = {s.end_time:.6g}: no collision can happen again"
@@ -39,7 +32,7 @@ def render(s) -> str:
     stored = (f"{s.snapshots} snapshots of positions and velocities, t = "
               f"{s.first_time:.6g} ... {s.last_time:.6g}" if s.snapshots else "no snapshots")
     lines = [
-        f"{s.path}  ({_size(s.file_bytes)}, chainrun {s.creator_version}, {s.created})",
+        f"{s.path}  ({human_size(s.file_bytes)}, chainrun {s.creator_version}, {s.created})",
         f"model     N = {s.n} balls, the first K = {s.k} striking at velocity 1; "
         f"{law_name(s.alpha)} contacts (alpha = {s.alpha:g}); paper units",
         f"outcome   {outcome}",

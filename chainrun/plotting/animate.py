@@ -21,7 +21,6 @@ __all__ = ["MAX_BALLS", "MAX_FRAMES", "animate_run"]
 MAX_FRAMES = 400
 MAX_BALLS = 300
 DPI = 100
-_UNITS = "paper units"
 
 
 def _frames(run) -> np.ndarray:
@@ -50,6 +49,7 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
 
     from chainrun import atomic
     from chainrun.plotting import style
+    from chainrun.plotting.views import UNITS
     from chainrun.store import read_run
 
     out = Path(out)
@@ -85,7 +85,7 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
         axes.set_xlim(*span)
         axes.set_ylim(-1.0, 1.0)
         axes.set_yticks([])
-        axes.set_xlabel(f"position ({_UNITS}; ball diameter 1)")
+        axes.set_xlabel(f"position ({UNITS}; ball diameter 1)")
         figure.colorbar(discs, ax=axes, label="velocity", fraction=0.03)
         label = axes.set_title("", loc="left", fontsize="medium")
         label.set_gid("time")

@@ -24,7 +24,7 @@ VIEWS = ("spacetime", "forces", "profiles", "displacements", "final", "energy", 
 MAX_IMAGE_BALLS = 2000
 #: profiles drawn at most
 MAX_PROFILES = 6
-_UNITS = "paper units"
+UNITS = "paper units"
 
 
 def _snapshots_needed(run, view: str, least: int) -> None:
@@ -43,8 +43,8 @@ def _spacetime(run, figure: Figure, axes) -> None:
                         vmin=-top, vmax=top, interpolation="nearest",
                         extent=(run.times[0], run.times[-1], balls[0] - 0.5,
                                 balls[-1] + stride - 0.5), gid="velocity")
-    figure.colorbar(image, ax=axes, label=f"velocity ({_UNITS})")
-    axes.set_xlabel(f"time ({_UNITS})")
+    figure.colorbar(image, ax=axes, label=f"velocity ({UNITS})")
+    axes.set_xlabel(f"time ({UNITS})")
     axes.set_ylabel("ball" + (f" (every {stride}th)" if stride > 1 else ""))
 
 
@@ -59,8 +59,8 @@ def _forces(run, figure: Figure, axes) -> None:
                         vmin=0.0, interpolation="nearest",
                         extent=(run.times[0], run.times[-1], contacts[0] - 0.5,
                                 contacts[-1] + stride - 0.5), gid="force")
-    figure.colorbar(image, ax=axes, label=f"contact force ({_UNITS})")
-    axes.set_xlabel(f"time ({_UNITS})")
+    figure.colorbar(image, ax=axes, label=f"contact force ({UNITS})")
+    axes.set_xlabel(f"time ({UNITS})")
     axes.set_ylabel("contact j (balls j, j+1)" + (f", every {stride}th" if stride > 1 else ""))
 
 
@@ -71,7 +71,7 @@ def _along_the_line(run, figure: Figure, axes, name: str, data, label: str) -> N
     for i in picks:
         axes.plot(balls, data[i], label=f"t = {run.times[i]:.4g}", gid=f"{name}/{i}")
     axes.set_xlabel("ball")
-    axes.set_ylabel(f"{label} ({_UNITS})")
+    axes.set_ylabel(f"{label} ({UNITS})")
     axes.legend(fontsize="small")
 
 
@@ -90,8 +90,8 @@ def _sensors(run, figure: Figure, axes) -> None:
     for s, ball in enumerate(run.sensor_balls):
         axes.plot(run.sensor_time, run.sensor_force[:, s, :].mean(axis=1),
                   label=f"ball {ball}", gid=f"sensor/{ball}")
-    axes.set_xlabel(f"time ({_UNITS})")
-    axes.set_ylabel(f"mean contact force on the ball ({_UNITS})")
+    axes.set_xlabel(f"time ({UNITS})")
+    axes.set_ylabel(f"mean contact force on the ball ({UNITS})")
     axes.legend(fontsize="small")
 
 
@@ -101,7 +101,7 @@ def _final(run, figure: Figure, axes, log: bool) -> None:
               gid="final_velocity")
     axes.axhline(0.0, color="0.6", linewidth=0.6)
     axes.set_xlabel("ball")
-    axes.set_ylabel(f"final velocity ({_UNITS})")
+    axes.set_ylabel(f"final velocity ({UNITS})")
     if log:
         small = np.abs(v[v != 0.0])
         axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
@@ -116,8 +116,8 @@ def _energy(run, figure: Figure, axes) -> None:
     axes.plot(t, kinetic, label="kinetic", gid="kinetic_energy")
     axes.plot(t, stored, label="in contacts", gid="potential_energy")
     axes.plot(t, kinetic + stored, label="total", color="black", gid="total_energy")
-    axes.set_xlabel(f"time ({_UNITS})")
-    axes.set_ylabel(f"energy ({_UNITS})")
+    axes.set_xlabel(f"time ({UNITS})")
+    axes.set_ylabel(f"energy ({UNITS})")
     axes.legend(fontsize="small")
 
 
@@ -181,7 +181,7 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
                       **MARKERS[which % len(MARKERS)])
         axes.axhline(0.0, color="0.6", linewidth=0.6)
         axes.set_xlabel(key)
-        axes.set_ylabel(f"final velocity ({_UNITS})")
+        axes.set_ylabel(f"final velocity ({UNITS})")
         axes.legend(fontsize="small")
     experiment = runs[0].parameters.get("experiment", "")
     figure.suptitle(f"{experiment}: {len(runs)} runs", fontsize="medium")
@@ -207,5 +207,5 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
             axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size
                                                     else 1.0, 1e-12))
     figure.supxlabel("ball", fontsize="small")
-    figure.supylabel(f"final velocity ({_UNITS})", fontsize="small")
+    figure.supylabel(f"final velocity ({UNITS})", fontsize="small")
     return figure
