@@ -1,0 +1,237 @@
+"""The line the solver integrates: balls, contacts, walls and external forces, in any units.
+
+Balls i = 1..N have masses ``m_i``, displacements ``x_i(t)`` from their reference
+positions (``x_i(0)`` is ``position``, 0 unless the line starts precompressed),
+velocities ``v_i(0)`` and constant external forces ``f_i``. Contact j joins balls j
+and j + 1; its compression is ``delta_j = x_j - x_{j+1} - g_j`` (``g_j > 0`` a gap,
+``< 0`` an initial overlap) and its force ``kappa_j (delta_j)_+^alpha_j`` never
+pulls. A wall is a contact with a body of infinite mass at rest: on the right
+``delta_R = x_N - g_R``, on the left ``delta_L = -x_1 - g_L``.
+
+    m_i x_i'' = F_{i-1} - F_i + f_i
+
+Any consistent units will do (SI, or the paper's, where every coefficient is 1): the
+driver solves in units of the line's own scales (``Scales``), so that speeds, masses
+and stiffnesses are of order 1 there whatever units they were given in.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A flat wall of infinite mass at rest, touching the end ball across ``gap``."""
+
+    stiffness: float
+    alpha: float = 1.5
+    gap: float = 0.0
+
+    def __post_init__(self):
+        for name, value, low in (("stiffness", self.stiffness, 0.0),
+                                 ("alpha", self.alpha, 1.0)):
+            if not (math.isfinite(value) and (value > low if name == "stiffness"
+                                              else value >= low)):
+                raise ValueError(f"wall {name} must be a finite number "
+                                 f"{'>' if name == 'stiffness' else '>='} {low:g}, "
+                                 f"got {value!r}")
+        if not math.isfinite(self.gap):
+            raise ValueError(f"wall gap must be finite, got {self.gap!r}")
+
+
+@dataclass(frozen=True)
+class Scales:
+    """The units the driver solves in: a mass, a length and a time (and from them a
+    velocity and a force). For the paper's line in its units, all are 1."""
+
+    mass: float
+    length: float
+    time: float
+
+    @property
+    def velocity(self) -> float:
+        return self.length / self.time
+
+    @property
+    def force(self) -> float:
+        return self.mass * self.length / (self.time * self.time)
+
+    @property
+    def energy(self) -> float:
+        return self.force * self.length
+
+
+def _per(name: str, value, size: int) -> np.ndarray:
+    """``value`` (a scalar or a sequence of ``size``) as a float array of ``size``."""
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        return np.full(size, float(a))
+    a = a.reshape(-1)
+    if a.size != size:
+        raise ValueError(f"{name} must be a number or a list of {size} numbers, "
+                         f"got a list of {a.size}")
+    return a.copy()
+
+
+def _check(name: str, a: np.ndarray, low: float | None = None, strict: bool = True):
+    bad = ~np.isfinite(a)
+    if low is not None:
+        bad |= (a <= low) if strict else (a < low)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        what = "finite" if low is None else f"finite and {'>' if strict else '>='} {low:g}"
+        raise ValueError(f"{name}[{i}] must be {what}, got {a[i]!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Line:
+    """A line of N balls (see the module's docstring); build it with ``Line.make``.
+
+    Arrays are per ball (``mass``, ``velocity``, ``force``, ``position``, shape (N,))
+    or per contact (``stiffness``, ``alpha``, ``gap``, shape (N-1,)).
+    """
+
+    mass: np.ndarray
+    stiffness: np.ndarray
+    alpha: np.ndarray
+    gap: np.ndarray
+    velocity: np.ndarray
+    force: np.ndarray
+    position: np.ndarray
+    left: Wall | None = None
+    right: Wall | None = None
+
+    def __post_init__(self):
+        n = self.mass.shape[0]
+        if n < 1:
+            raise ValueError("a line needs at least one ball")
+        for name in ("mass", "velocity", "force", "position"):
+            a = getattr(self, name)
+            if a.shape != (n,):
+                raise ValueError(f"{name} must have one value per ball ({n})")
+        for name in ("stiffness", "alpha", "gap"):
+            a = getattr(self, name)
+            if a.shape != (n - 1,):
+                raise ValueError(f"{name} must have one value per contact ({n - 1})")
+        _check("mass", self.mass, 0.0)
+        _check("stiffness", self.stiffness, 0.0)
+        _check("alpha", self.alpha, 1.0, strict=False)
+        for name in ("gap", "velocity", "force", "position"):
+            _check(name, getattr(self, name))
+        for name in ("mass", "stiffness", "alpha", "gap", "velocity", "force", "position"):
+            getattr(self, name).setflags(write=False)
+
+    @classmethod
+    def make(cls, n: int, *, mass=1.0, stiffness=1.0, alpha=1.5, gap=0.0,
+             velocity=None, k: int | None = None, speed: float = 1.0, force=0.0,
+             position=0.0, left: Wall | None = None, right: Wall | None = None) -> Line:
+        """A line from scalars (every ball or contact alike) or sequences.
+
+        The initial velocities are ``velocity`` (one per ball), or the first ``k``
+        balls at ``speed`` and the rest at rest (k = 1 by default).
+        """
+        if isinstance(n, bool) or int(n) != n or n < 1:
+            raise ValueError(f"n must be an integer >= 1, got {n!r}")
+        n = int(n)
+        if velocity is None:
+            k = 1 if k is None else k
+            if isinstance(k, bool) or int(k) != k or not 0 <= k <= n:
+                raise ValueError(f"k must be an integer with 0 <= k <= n ({n}), got {k!r}")
+            v = np.zeros(n)
+            v[:int(k)] = speed
+        elif k is not None:
+            raise ValueError("give the initial velocities or k, not both")
+        else:
+            v = _per("velocity", velocity, n)
+        return cls(
+            mass=_per("mass", mass, n),
+            stiffness=_per("stiffness", stiffness, n - 1),
+            alpha=_per("alpha", alpha, n - 1),
+            gap=_per("gap", gap, n - 1),
+            velocity=v,
+            force=_per("force", force, n),
+            position=_per("position", position, n),
+            left=left, right=right,
+        )
+
+    @classmethod
+    def paper(cls, n: int, k: int, alpha: float) -> Line:
+        """The paper's line: unit masses and stiffnesses, the first k balls at 1."""
+        return cls.make(n, k=k, alpha=alpha)
+
+    @property
+    def n(self) -> int:
+        return int(self.mass.shape[0])
+
+    @property
+    def walls(self) -> tuple[Wall | None, Wall | None]:
+        return self.left, self.right
+
+    @property
+    def has_terminal_state(self) -> bool:
+        """Whether a terminal state can exist: no external force keeps doing work, and
+        the line is not held between two walls."""
+        return not np.any(self.force != 0.0) and not (self.left and self.right)
+
+    @property
+    def is_paper(self) -> bool:
+        """Unit masses and stiffnesses, no gap, force or wall, one exponent, balls at
+        rest or at velocity 1: the paper's line."""
+        return bool(
+            np.all(self.mass == 1.0) and np.all(self.stiffness == 1.0)
+            and np.all(self.alpha == self.alpha[:1]) and not np.any(self.gap)
+            and not np.any(self.force) and not np.any(self.position)
+            and np.all((self.velocity == 0.0) | (self.velocity == 1.0))
+            and self.left is None and self.right is None)
+
+    def contact_params(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(stiffness, alpha, gap) of every contact, the walls' included: the left
+        wall's first, the right wall's last."""
+        ks, als, gs = [self.stiffness], [self.alpha], [self.gap]
+        if self.left is not None:
+            ks.insert(0, [self.left.stiffness])
+            als.insert(0, [self.left.alpha])
+            gs.insert(0, [self.left.gap])
+        if self.right is not None:
+            ks.append([self.right.stiffness])
+            als.append([self.right.alpha])
+            gs.append([self.right.gap])
+        return (np.concatenate(ks).astype(float), np.concatenate(als).astype(float),
+                np.concatenate(gs).astype(float))
+
+    def scales(self) -> Scales:
+        """Units in which this line's typical mass, stiffness and speed are 1.
+
+        Mass M: the median mass; stiffness K and exponent a: the median contact's
+        (walls included); velocity V: the largest initial speed, or, for a line at
+        rest, the speed a typical force (external, or of the largest overlap) gives
+        over its static compression. Then the time ``T = (M V^(1-a) / K)^(1/(a+1))``
+        and length ``V T`` make the force law ``K x^a`` balance ``M x''``: the paper's
+        scales (its section 2), which are all 1 for its own line.
+        """
+        kappa, alpha, gap = self.contact_params()
+        mass = float(np.median(self.mass))
+        if kappa.size == 0:  # one ball, no wall: nothing to balance
+            v = float(np.max(np.abs(self.velocity)))
+            return Scales(mass, v if v > 0 else 1.0, 1.0)
+        i = int(np.argsort(kappa, kind="stable")[kappa.size // 2])
+        k0, a0 = float(kappa[i]), float(alpha[i])
+        speed = float(np.max(np.abs(self.velocity)))
+        if speed == 0.0:
+            # a line at rest moves only under its forces or overlaps: their static
+            # compression L = (F/K)^(1/a) and the time sqrt(M L / F) give a speed
+            f = float(np.max(np.abs(self.force)))
+            overlap = float(max(np.max(-gap, initial=0.0),
+                                np.max(np.abs(np.diff(self.position)), initial=0.0)))
+            if overlap > 0.0:
+                f = max(f, k0 * overlap ** a0)
+            if f == 0.0:
+                return Scales(mass, 1.0, 1.0)
+            length = (f / k0) ** (1.0 / a0)
+            speed = math.sqrt(length * f / mass)
+        time = (mass * speed ** (1.0 - a0) / k0) ** (1.0 / (a0 + 1.0))
+        return Scales(mass, speed * time, time)
