@@ -34,14 +34,20 @@ from typing import Callable
 
 import numpy as np
 
+from chainrun.solver.model import Line, Scales, Wall
+
 __all__ = [
     "DEFAULT_RTOL",
     "Diagnostics",
     "EventKind",
     "Outcome",
     "Solution",
+    "Line",
+    "Scales",
+    "Wall",
     "load_kernels",
     "simulate",
+    "simulate_line",
     "velocity_floor",
 ]
 
@@ -245,6 +251,33 @@ def simulate(
 
     return run(
         n, k, alpha, times, t_end=t_end, rtol=rtol, max_events=max_events,
+        on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
+        sensor_dt=sensor_dt,
+    )
+
+
+def simulate_line(
+    line: Line,
+    times=(),
+    *,
+    t_end: float | None = None,
+    rtol: float = DEFAULT_RTOL,
+    max_events: int | None = None,
+    on_snapshot: SnapshotHook | None = None,
+    on_progress: ProgressHook | None = None,
+    sensors=(),
+    sensor_dt: float | None = None,
+) -> Solution:
+    """Run any ``Line`` (masses, stiffnesses, exponents, gaps, walls, forces) to its
+    terminal state, or to ``t_end``; inputs and results in the line's own units.
+
+    The arguments are those of ``simulate``. A line whose forces keep doing work, or
+    that is held between two walls, has no terminal state: it needs ``t_end``.
+    """
+    from chainrun.solver._driver import run_line
+
+    return run_line(
+        line, times, t_end=t_end, rtol=rtol, max_events=max_events,
         on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
         sensor_dt=sensor_dt,
     )

@@ -318,6 +318,14 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     )
 
 
+def run_line(line, times=(), **kw) -> Solution:
+    """See ``chainrun.solver.simulate_line``."""
+    if not line.is_paper:
+        raise NotImplementedError("general lines are not wired into the kernels yet")
+    k = int(np.count_nonzero(line.velocity))
+    return run(line.n, k, float(line.alpha[0]) if line.n > 1 else 1.5, times, **kw)
+
+
 def _message(outcome: Outcome, t: float, events: int, S: _state.State) -> str:
     if outcome is Outcome.TERMINAL:
         return f"terminal state reached at t = {t:.6g} after {events} events"
