@@ -145,8 +145,13 @@ class Solution:
         The sample times: 0, dt, 2 dt, ... up to ``end_time``.
     sensor_force : ndarray, shape (M, S, 2)
         The contact forces on each sensor ball at each sample, on its side towards
-        ball 1 and on its far side (0 at the line's ends); an embedded sensor measures
-        their mean. Exact at each sample, from the step that contains it.
+        ball 1 and on its far side (0 at the line's ends, unless a wall is there); an
+        embedded sensor measures their mean. Exact at each sample, from the step that
+        contains it.
+    line : Line
+        The line that was run. Every result is in its units; ``n``, ``k`` and
+        ``alpha`` are its number of balls, of balls moving at t = 0 and its contacts'
+        exponent (NaN if they differ).
     """
 
     n: int
@@ -172,6 +177,7 @@ class Solution:
     sensor_time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     sensor_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)),
                                      repr=False)
+    line: Line | None = field(default=None, repr=False)
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a

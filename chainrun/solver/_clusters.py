@@ -15,7 +15,8 @@ from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    F_T, I_DENSE, I_DIRTY, I_DSTAMP, I_M, I_MAXWIN, I_NCL, I_NFREED, OPEN, _find_cluster,
+    B_ACC, B_IM, B_MASS, C_ALPHA, C_KAPPA, F_T, I_DENSE, I_DIRTY, I_DSTAMP, I_M,
+    I_MAXWIN, I_NCL, I_NFREED, OPEN, W_ACC, W_ALPHA, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -146,19 +147,26 @@ def _rebuild(S):
         S.coff[c] = p
         for b in range(S.clo[c], S.chi[c] + 1):
             S.cb[p] = b
-            S.X[p] = S.bx[b] + S.bv[b] * (t - S.bt[b])
-            S.V[p] = S.bv[b]
+            S.X[p], S.V[p] = _free_at(S, b, t)
             S.bmap[b] = p
+            S.WP[W_IM, p] = S.bp[B_IM, b]
+            S.WP[W_ACC, p] = S.bp[B_ACC, b]
+            S.WP[W_MASS, p] = S.bp[B_MASS, b]
             p += 1
     S.ints[I_M] = m
     if m > S.ints[I_MAXWIN]:
         S.ints[I_MAXWIN] = m
-    # contact lanes: 1 inside a cluster, 0 from a cluster's last ball to the next's first
+    # contact lanes: their stiffness inside a cluster, 0 from a cluster's last ball to
+    # the next's first, with their exponents (a lane without force, and the series'
+    # spare lanes, need only a finite one)
     for p in range(m):
         S.TR[p] = 0.0
+        S.WP[W_ALPHA, p] = 1.0
     for c in range(ncl):
         for p in range(S.coff[c], S.coff[c] + S.chi[c] - S.clo[c]):
-            S.TR[p] = 1.0
+            j = S.cb[p]
+            S.TR[p] = S.cp[C_KAPPA, j]
+            S.WP[W_ALPHA, p] = S.cp[C_ALPHA, j]
     for c in range(ncl):
         S.cen[c] = _cluster_energy(S, c)
     _rhs(S, S.X, S.A)

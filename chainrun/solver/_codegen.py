@@ -43,7 +43,7 @@ def _combo(coefs, rows: str, scale: str, index: str = "p") -> str:
 
 def _force_pass(x: str, s: int) -> list[str]:
     """Accelerations at positions x into KV[s], across the window (_accelerations)."""
-    return [f"    _accelerations({x}, F, MK, KV[{s}], m, mode, alpha)"]
+    return [f"    _accelerations({x}, F, MK, WP, KV[{s}], m, mode, alpha, unit)"]
 
 
 def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
@@ -66,9 +66,10 @@ def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
         f"    hi = min(e, p + {reach})",
         "    for q in range(lo, hi + 1):",
         f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
-        "    _forces(Xs, F, MK, lo, hi, mode, alpha)",
+        "    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
         "    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):",
-        f"        KV[{s}, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)",
+        f"        KV[{s}, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0))"
+        " * WP[W_IM, q] + WP[W_ACC, q]",
     ]
 
 
@@ -76,7 +77,8 @@ _PROLOGUE = [
     "    m = S.ints[I_M]",
     "    mode = S.ints[I_MODE]",
     "    alpha = S.fs[F_ALPHA]",
-    "    F, MK = S.FS, S.TR",
+    "    unit = S.ints[I_UNIT] == 1",
+    "    F, MK, WP = S.FS, S.TR, S.WP",
 ]
 
 
@@ -118,24 +120,45 @@ def _chains(terms: list[str]) -> str:
     return "(" + " + ".join(terms[0::2]) + ") + (" + " + ".join(terms[1::2]) + ")"
 
 
-def _series(pt: int, tile: int) -> list[str]:
+def _series(pt: int, tile: int, mixed: bool) -> list[str]:
     """Orders 1..pt-2 of the force series and 3..pt of the positions' (see _taylor).
 
     f_k = (alpha c_k f_0 + sum_{j=1..k-1} ((alpha+1) j / k - 1) c_j f_{k-j}) / c_0, the
     recurrence of _taylor with 1/k folded into its weights, on the work tiles TW
-    (rows c_k at k, f_k at pt + 1 + k, 1/c_0 at 2 pt; see _tw). The sum over j is a loop;
-    within it the tile's ``tile`` lanes are written out, each with two accumulators (even
-    and odd j), so that they stay in registers and the compiler packs the lanes into
-    vector instructions: a loop over the lanes would load and store its partial sums at
-    every j, and sums written out for every order would be a function of thousands of
-    lines, slow to compile.
+    (rows c_k at k, f_k at pt + 1 + k, 1/c_0 at 2 pt; see _tw); a ball's term of order
+    k + 2 is its net force's of order k over its mass, over (k + 1)(k + 2). The sum
+    over j is a loop; within it the tile's ``tile`` lanes are written out, each with two
+    accumulators (even and odd j), so that they stay in registers and the compiler
+    packs the lanes into vector instructions: a loop over the lanes would load and
+    store its partial sums at every j, and sums written out for every order would be a
+    function of thousands of lines, slow to compile. ``mixed``: each lane has its own
+    exponent (AL), and so its own weights.
     """
     lanes = range(tile)
+    if mixed:
+        name, args = "_series_orders_mixed", "TX, W, IM, AL, nc, m"
+        doc = "Orders 1 and up of the force series, each lane its own alpha (see _taylor)."
+        head = [f"            a{i} = AL[t * SERIES_TILE + {i}]" for i in lanes]
+        head += [f"            b{i} = a{i} + 1.0" for i in lanes]
+        first = [f"            e{i} = a{i} * W[c + {i}] * W[f + {i}]" for i in lanes]
+        weight = ["                jk = J_OVER_K[k, j]"]
+
+        def term(acc, i):
+            return f"                {acc}{i} += (b{i} * jk - 1.0) * W[c + {i}] * W[f + {i}]"
+    else:
+        name, args = "_series_orders", "TX, W, IM, nc, m, alpha"
+        doc = "Orders 1 and up of the force series of every contact lane (see _taylor)."
+        head = []
+        first = [f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes]
+        weight = ["                w = a1 * J_OVER_K[k, j] - 1.0"]
+
+        def term(acc, i):
+            return f"                {acc}{i} += w * W[c + {i}] * W[f + {i}]"
     lines = [
         "@kernel(fastmath={\"contract\"})",
-        "def _series_orders(TX, W, nc, m, alpha):",
-        '    """Orders 1 and up of the force series of every contact lane (see _taylor)."""',
-        "    a1 = alpha + 1.0",
+        f"def {name}({args}):",
+        f'    """{doc}"""',
+        *([] if mixed else ["    a1 = alpha + 1.0"]),
         "    nt = (nc + SERIES_TILE - 1) // SERIES_TILE",
         f"    f0 = {pt + 1}  # row of f_0",
         f"    for k in range(1, {pt - 1}):",
@@ -145,18 +168,19 @@ def _series(pt: int, tile: int) -> list[str]:
         "            o = t * TILE_STRIDE",
         "            c = o + k * SERIES_TILE",
         "            f = o + f0 * SERIES_TILE",
-        *[f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes],
+        *head,
+        *first,
         *[f"            d{i} = 0.0" for i in lanes],
         "            for j in range(1, k, 2):",
-        "                w = a1 * J_OVER_K[k, j] - 1.0",
+        *weight,
         "                c = o + j * SERIES_TILE",
         "                f = o + (f0 + k - j) * SERIES_TILE",
-        *[f"                d{i} += w * W[c + {i}] * W[f + {i}]" for i in lanes],
+        *[term("d", i) for i in lanes],
         "            for j in range(2, k, 2):",
-        "                w = a1 * J_OVER_K[k, j] - 1.0",
+        *weight,
         "                c = o + j * SERIES_TILE",
         "                f = o + (f0 + k - j) * SERIES_TILE",
-        *[f"                e{i} += w * W[c + {i}] * W[f + {i}]" for i in lanes],
+        *[term("e", i) for i in lanes],
         "            c = o + (f0 + k) * SERIES_TILE",
         f"            f = o + {2 * pt} * SERIES_TILE",
         *[f"            W[c + {i}] = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
@@ -164,7 +188,7 @@ def _series(pt: int, tile: int) -> list[str]:
         "        for p in range(m):",
         "            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
         "            fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
-        "            TX[k + 2, p] = (fl - fr) * s",
+        "            TX[k + 2, p] = (fl - fr) * s * IM[p]",
         "    # the compressions' last two orders, for the bounds (_series_bounds)",
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",
@@ -230,8 +254,8 @@ _HEADER = [
     "from chainrun.solver._forces import _accelerations, _forces",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
-    "    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, J_OVER_K, LO_ROW, SERIES_SCALE,",
-    "    SERIES_TILE, TILE_STRIDE, _find_cluster, _tw,",
+    "    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, I_UNIT, J_OVER_K, LO_ROW,",
+    "    SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,",
     ")",
 ]
 
@@ -326,7 +350,7 @@ def generate() -> str:
         "    mode = S.ints[I_MODE]",
         "    alpha = S.fs[F_ALPHA]",
         "    h = S.fs[F_HLAST]",
-        "    KV, X0, V0, Xs, F, MK = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR",
+        "    KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP",
         "    c = _find_cluster(S, S.cb[p])",
         "    o = S.coff[c]",
         "    e = o + S.chi[c] - S.clo[c]",
@@ -346,7 +370,8 @@ def generate() -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
-    lines += ["", ""] + _series(PT, SERIES_TILE) + ["", ""] + _bounds(PT, DB)
+    lines += ["", ""] + _series(PT, SERIES_TILE, False) + ["", ""]
+    lines += _series(PT, SERIES_TILE, True) + ["", ""] + _bounds(PT, DB)
     return "\n".join(lines) + "\n"
 
 

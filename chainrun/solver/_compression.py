@@ -13,7 +13,7 @@ import numpy as np
 
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    DB, EPS, F_EPSREL, F_HLAST, F_TPREV, N_SERIES_SAMPLES, PT, _BERN,
+    B_ACC, C_EPS, DB, EPS, F_HLAST, F_TPREV, N_SERIES_SAMPLES, PT, _BERN, _free_at,
 )
 
 
@@ -30,7 +30,7 @@ def _series_at(T, s):
 def _contact_series(S, j):
     """The series of contact j's compression over the last (series) step into TD.
 
-    A free ball's series is its straight line.
+    A free ball's series is its parabola (a straight line without external force).
     """
     pa = S.bmap[j]
     pb = S.bmap[j + 1]
@@ -40,16 +40,18 @@ def _contact_series(S, j):
         for k in range(PT + 1):
             TD[k] = TX[k, pa]
     else:
-        for k in range(2, PT + 1):
+        for k in range(3, PT + 1):
             TD[k] = 0.0
-        TD[0] = S.bx[j] + S.bv[j] * (t0 - S.bt[j])
-        TD[1] = S.bv[j]
+        TD[0], TD[1] = _free_at(S, j, t0)
+        TD[2] = 0.5 * S.bp[B_ACC, j]
     if pb >= 0:
         for k in range(PT + 1):
             TD[k] -= TX[k, pb]
     else:
-        TD[0] -= S.bx[j + 1] + S.bv[j + 1] * (t0 - S.bt[j + 1])
-        TD[1] -= S.bv[j + 1]
+        x, v = _free_at(S, j + 1, t0)
+        TD[0] -= x
+        TD[1] -= v
+        TD[2] -= 0.5 * S.bp[B_ACC, j + 1]
 
 
 @kernel
@@ -104,7 +106,7 @@ def _bernstein_range(T, h, B):
 def _pressed_in_step(S, j):
     """Whether fresh contact j was pressed beyond eps_rel inside the last series step."""
     h = S.fs[F_HLAST]
-    epsrel = S.fs[F_EPSREL]
+    epsrel = S.cp[C_EPS, j]
     _contact_series(S, j)
     if _bernstein_range(S.TD, h, S.TS[0])[1] <= epsrel:
         return False
@@ -122,8 +124,10 @@ def _curvature_bound(S, j):
     its two ends (the step is short)."""
     pa = S.bmap[j]
     pb = S.bmap[j + 1]
-    g0 = (S.A0[pa] if pa >= 0 else 0.0) - (S.A0[pb] if pb >= 0 else 0.0)
-    g1 = (S.A[pa] if pa >= 0 else 0.0) - (S.A[pb] if pb >= 0 else 0.0)
+    ga = S.bp[B_ACC, j]
+    gb = S.bp[B_ACC, j + 1]
+    g0 = (S.A0[pa] if pa >= 0 else ga) - (S.A0[pb] if pb >= 0 else gb)
+    g1 = (S.A[pa] if pa >= 0 else ga) - (S.A[pb] if pb >= 0 else gb)
     return max(abs(g0), abs(g1))
 
 

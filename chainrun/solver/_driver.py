@@ -21,6 +21,7 @@ from chainrun.solver import (
     velocity_floor,
 )
 from chainrun.solver import _jit, _loop, _state
+from chainrun.solver.model import Line
 from chainrun.solver.physics import contact_forces, kinetic_energy, momentum, potential_energy
 
 _EVENT_BUFFER = 1 << 16
@@ -47,22 +48,18 @@ def load_kernels(S: _state.State | None = None) -> None:
     _jit.prepare(_loop._sample, S, 0.0, np.zeros(1, np.int64), np.zeros(1))
 
 
-def release_compression(alpha: float, floor: float) -> float:
+def release_compression(alpha, floor, stiffness=1.0, inverse_mass=2.0):
     """Compression whose stored energy equals a relative speed of ``floor``.
 
-    Solves ``4 c^(alpha+1) / (alpha+1) = floor^2``: contacts pressed less than this,
+    Solves ``2 kappa c^(alpha+1) / ((alpha+1) mu) = floor^2`` (mu the pair's reduced
+    mass, 1 / inverse_mass: 1/2 for two unit balls): contacts pressed less than this,
     and moving slower than the floor, cannot produce a speed above the floor.
     """
-    return ((alpha + 1.0) * floor * floor / 4.0) ** (1.0 / (alpha + 1.0))
+    return ((alpha + 1.0) * floor * floor / (2.0 * inverse_mass * stiffness)) ** (
+        1.0 / (alpha + 1.0))
 
 
-def _check_inputs(n, k, alpha, times, t_end, rtol, max_events):
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be an integer >= 1, got {n!r}")
-    if isinstance(k, bool) or int(k) != k or not 1 <= k <= n:
-        raise ValueError(f"k must be an integer with 1 <= k <= n ({n}), got {k!r}")
-    if not (math.isfinite(alpha) and alpha >= 1.0):
-        raise ValueError(f"alpha must be a finite number >= 1, got {alpha!r}")
+def _check_inputs(times, t_end, rtol, max_events):
     if not (math.isfinite(rtol) and 1e-15 <= rtol <= 1e-3):
         raise ValueError(f"rtol must be within [1e-15, 1e-3], got {rtol!r}")
     times = np.asarray(times, dtype=np.float64).reshape(-1)
@@ -76,62 +73,209 @@ def _check_inputs(n, k, alpha, times, t_end, rtol, max_events):
             raise ValueError(f"snapshot time {times[-1]} is after t_end = {t_end}")
     if max_events is not None and (int(max_events) != max_events or max_events < 1):
         raise ValueError(f"max_events must be a positive integer, got {max_events!r}")
-    return int(n), int(k), float(alpha), times
+    return times
+
+
+def _check_paper(n, k, alpha):
+    if isinstance(n, bool) or int(n) != n or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    if isinstance(k, bool) or int(k) != k or not 1 <= k <= n:
+        raise ValueError(f"k must be an integer with 1 <= k <= n ({n}), got {k!r}")
+    if not (math.isfinite(alpha) and alpha >= 1.0):
+        raise ValueError(f"alpha must be a finite number >= 1, got {alpha!r}")
+    return int(n), int(k), float(alpha)
+
+
+class _Prepared:
+    """A ``Line`` in the units of its scales, walls made balls of infinite mass.
+
+    Internal ball i is the line's ball i - lw (lw = 1 with a left wall, whose ball is
+    internal ball 0; a right wall's is the last); internal contact j is the line's
+    contact j - lw (the left wall's is -1, the right wall's n - 1). Gaps become
+    offsets of the reference positions: internal positions are ``y = x + s`` with
+    ``s`` the gaps summed from the left, so that every compression is a plain
+    difference ``y_j - y_{j+1}`` in the kernels. For the paper's line every scale is 1,
+    every offset 0, and the arrays are the paper's to the bit.
+    """
+
+    def __init__(self, line: Line):
+        self.line = line
+        sc = self.scales = line.scales()
+        n = self.n = line.n
+        self.lw = 1 if line.left is not None else 0
+        self.rw = 1 if line.right is not None else 0
+        nb = self.nb = n + self.lw + self.rw
+        balls = slice(self.lw, self.lw + n)
+        kappa, alpha, gap = line.contact_params()
+        self.alpha = alpha
+        # kappa L^alpha is a force, in units of M L / T^2
+        self.kappa = kappa * (sc.length ** (alpha - 1.0) * sc.time * sc.time / sc.mass)
+        self.mass = np.zeros(nb)
+        self.mass[balls] = line.mass / sc.mass
+        self.im = np.zeros(nb)
+        self.im[balls] = 1.0 / self.mass[balls]
+        self.acc = np.zeros(nb)
+        self.acc[balls] = line.force / sc.force / self.mass[balls]
+        self.offset = np.zeros(nb)
+        if nb > 1:
+            self.offset[1:] = np.cumsum(gap / sc.length)
+        self.y0 = self.offset.copy()
+        self.y0[balls] += line.position / sc.length
+        self.v0 = np.zeros(nb)
+        self.v0[balls] = line.velocity / sc.velocity
+        self.balls = balls
+        self.unit = bool(np.all(self.mass == 1.0) and not np.any(self.acc))
+        a = alpha
+        if a.size == 0 or np.all(a == 1.0):
+            self.mode, self.alpha0 = _state.MODE_LINEAR, 1.0
+        elif np.all(a == 1.5):
+            self.mode, self.alpha0 = _state.MODE_HERTZ, 1.5
+        elif np.all(a == a[0]):
+            self.mode, self.alpha0 = _state.MODE_POWER, float(a[0])
+        else:
+            self.mode, self.alpha0 = _state.MODE_MIXED, math.nan
+
+    def positions(self, y: np.ndarray) -> np.ndarray:
+        """The line's displacements, in its units, from internal positions."""
+        sc = self.scales
+        return (y[self.balls] - self.offset[self.balls]) * sc.length
+
+    def velocities(self, v: np.ndarray) -> np.ndarray:
+        return v[self.balls] * self.scales.velocity
+
+    def energy(self, y: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic plus contact energy, less the external forces' potential (units of the
+        scales); conserved."""
+        c = y[:-1] - y[1:]
+        pos = c > 0.0
+        pe = float(np.sum(self.kappa[pos] * c[pos] ** (self.alpha[pos] + 1.0)
+                          / (self.alpha[pos] + 1.0)))
+        ke = 0.5 * float(np.sum(self.mass * v * v))
+        return ke + pe - float(np.sum(self.mass * self.acc * y))
 
 
 def _alloc_window(cap: int) -> dict:
+    lanes = -(-cap // _state.SERIES_TILE) * _state.SERIES_TILE
     return dict(
         cb=np.zeros(cap, np.int64),
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
         FS=np.zeros(cap), KV=np.zeros((_state._NSE, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
+        WP=np.zeros((4, lanes)),
         TX=np.zeros((_state.PT + 1, cap)),
-        TW=np.zeros(-(-cap // _state.SERIES_TILE) * _state.TILE_STRIDE),
+        TW=np.zeros(lanes * _state.TILE_ROWS),
         TR=np.zeros(cap),
         TD=np.zeros(_state.PT + 1), TS=np.zeros((2, _state.N_SERIES_SAMPLES)),
     )
 
 
+def _initial_contacts(P: _Prepared, cp: np.ndarray, floor: float):
+    """Each contact's state at t = 0, its engage level, and the clusters.
+
+    Compressed, or touching and closing (or pressed by external forces): active, in a
+    cluster. Touching at rest relative to each other: dormant. Apart, or touching and
+    parting: open, and, if the pair closes, its collision is predicted.
+    """
+    y, v, g = P.y0, P.v0, P.acc
+    c = y[:-1] - y[1:]
+    w = v[:-1] - v[1:]
+    a = g[:-1] - g[1:]
+    touching = c == 0.0
+    active = (c > 0.0) | (touching & ((w > 0.0) | ((w == 0.0) & (a > 0.0))))
+    dormant = touching & (w == 0.0) & (a == 0.0)
+    cst = np.full(c.size, _state.OPEN, np.int8)
+    cst[dormant] = _state.DORMANT
+    cst[active] = _state.ACTIVE
+    rounding = 64.0 * _state.EPS * np.maximum(1.0, np.abs(y[:-1]) + np.abs(y[1:]))
+    lvl = np.where(cst == _state.OPEN, np.maximum(c, 0.0) + np.maximum(cp[_state.C_EPS],
+                                                                       rounding), 0.0)
+    # clusters: maximal runs of active contacts
+    edges = np.diff(np.concatenate([[0], active.astype(np.int8), [0]]))
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1)  # one past the run's last contact: its last ball
+    opened = np.flatnonzero(cst == _state.OPEN)
+    free = np.ones(P.nb, bool)
+    for lo, hi in zip(starts, ends):
+        free[lo:hi + 1] = False
+    near = np.unique(np.concatenate([opened, opened + 1]))
+    return cst, lvl, starts, ends, near[free[near]] if near.size else near
+
+
+def _level(force, kappa, alpha):
+    """The compression where a contact's force reaches ``force``."""
+    return (force / kappa) ** (1.0 / alpha)
+
+
+def _uniform(f, *args):
+    """``f`` of per-contact arrays, evaluated once in scalars where every contact is
+    alike: numpy's vector powers may differ from the scalar ones in the last bit, by
+    CPU, and the thresholds of the paper's line are the same on every machine."""
+    arrays = [a for a in args if isinstance(a, np.ndarray)]
+    if all(np.all(a == a[0]) for a in arrays):
+        one = [float(a[0]) if isinstance(a, np.ndarray) else a for a in args]
+        return np.full(arrays[0].size, f(*one))
+    return f(*args)
+
+
 def _new_state(n, k, alpha, rtol, t_end, max_events) -> _state.State:
-    ncont = max(n - 1, 1)
+    """The state of the paper's line (for the kernels' tests and their compilation)."""
+    n, k, alpha = _check_paper(n, k, alpha)
+    return _line_state(_Prepared(Line.paper(n, k, alpha)), rtol, t_end, max_events)
+
+
+def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
+    nb = P.nb
+    ncont = max(nb - 1, 1)
     floor = velocity_floor(rtol)
-    bv = np.zeros(n)
-    bv[:k] = 1.0
-    cst = np.full(ncont, _state.DORMANT, np.int8)
+    cp = np.zeros((5, ncont))
+    if nb > 1:
+        cp[_state.C_KAPPA] = P.kappa
+        cp[_state.C_ALPHA] = P.alpha
+        im = P.im[:-1] + P.im[1:]
+        cp[_state.C_EPS] = _uniform(release_compression, P.alpha, floor, P.kappa, im)
+        cp[_state.C_DORM] = _uniform(_level, _state.FORCE_DORMANT, P.kappa, P.alpha)
+        cp[_state.C_LOC] = _uniform(_level, _state.FORCE_LOCATE, P.kappa, P.alpha)
+        cst, lvl, starts, ends, freed0 = _initial_contacts(P, cp, floor)
+    else:
+        cst, lvl = np.full(1, _state.DORMANT, np.int8), np.zeros(1)
+        starts = ends = freed0 = np.zeros(0, np.int64)
+    bp = np.zeros((3, nb))
+    bp[_state.B_MASS] = P.mass
+    bp[_state.B_IM] = P.im
+    bp[_state.B_ACC] = P.acc
     fs = np.zeros(_state.F_NFLOAT)
     ints = np.zeros(_state.I_NINT, np.int64)
-    ccap = n // 2 + 2
+    ccap = nb // 2 + 2
     clo = np.zeros(ccap, np.int64)
     chi = np.zeros(ccap, np.int64)
-    if k < n:
-        # the last impacting ball meets the first ball at rest: the one live contact
-        cst[k - 1] = _state.ACTIVE
-        clo[0], chi[0] = k - 1, k
-        ints[_state.I_NCL] = 1
-        ints[_state.I_DIRTY] = 1
+    clo[:starts.size] = starts
+    chi[:ends.size] = ends
+    ints[_state.I_NCL] = starts.size
+    freed = np.zeros(2 * nb + 8, np.int64)
+    freed[:freed0.size] = freed0
+    ints[_state.I_NFREED] = freed0.size
+    ints[_state.I_DIRTY] = 1 if starts.size or freed0.size else 0
     fs[_state.F_H] = 1e-3
     fs[_state.F_TEND] = math.inf if t_end is None else float(t_end)
     fs[_state.F_TOL] = rtol
     fs[_state.F_FLOOR] = floor
-    fs[_state.F_EPSREL] = release_compression(alpha, floor)
-    fs[_state.F_ALPHA] = alpha
-    fs[_state.F_LDORM] = _state.FORCE_DORMANT ** (1.0 / alpha)
-    fs[_state.F_LLOCATE] = _state.FORCE_LOCATE ** (1.0 / alpha)
-    ints[_state.I_MODE] = 0 if alpha == 1.0 else (1 if alpha == 1.5 else 2)
+    fs[_state.F_ALPHA] = P.alpha0
+    ints[_state.I_MODE] = P.mode
+    ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
-        bx=np.zeros(n), bv=bv, bt=np.zeros(n),
-        sep_t=np.full(n, np.nan), sep_v=np.full(n, np.nan),
-        bmap=np.full(n, -1, np.int64),
-        cst=cst, lvl=np.zeros(ncont), stamp=np.zeros(ncont, np.int64),
+        bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),
+        sep_t=np.full(nb, np.nan), sep_v=np.full(nb, np.nan),
+        bmap=np.full(nb, -1, np.int64), bp=bp,
+        cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp,
         clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
-        **_alloc_window(min(n, _INITIAL_WINDOW)),
-        hp_t=np.zeros(n), hp_j=np.zeros(n, np.int64), hp_s=np.zeros(n, np.int64),
+        **_alloc_window(min(nb, _INITIAL_WINDOW)),
+        hp_t=np.zeros(nb), hp_j=np.zeros(nb, np.int64), hp_s=np.zeros(nb, np.int64),
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
-        ox=np.zeros(n), ov=np.zeros(n),
-        freed=np.zeros(2 * n + 8, np.int64), jbuf=np.zeros(n, np.int64),
+        ox=np.zeros(nb), ov=np.zeros(nb),
+        freed=freed, jbuf=np.zeros(nb, np.int64),
         fs=fs, ints=ints,
     )
 
@@ -159,13 +303,15 @@ def _check_sensors(sensors, sensor_dt, n):
 
 
 class _Sensors:
-    """The samples of the sensor balls' neighbourhoods: positions of balls b-1, b, b+1
-    at t = 0, dt, 2 dt, ..., turned into the contact forces on each side of b."""
+    """The samples of the sensor balls' neighbourhoods: internal positions of balls
+    b-1, b, b+1 (a wall's included) at t = 0, dt, 2 dt, ... (in the units of the
+    scales), turned into the contact forces on each side of b."""
 
-    def __init__(self, balls, dt, n, alpha):
-        self.balls, self.dt, self.n, self.alpha = balls, dt, n, alpha
-        near = np.concatenate([balls - 2, balls - 1, balls])  # 0-based b-1, b, b+1
-        self.probe = np.unique(near[(near >= 0) & (near < n)]).astype(np.int64)
+    def __init__(self, balls, dt, P: _Prepared):
+        self.balls, self.dt, self.P = balls, dt, P
+        inner = balls - 1 + P.lw  # internal indices
+        near = np.concatenate([inner - 1, inner, inner + 1])
+        self.probe = np.unique(near[(near >= 0) & (near < P.nb)]).astype(np.int64)
         self.buffer = np.empty(self.probe.size)
         self.times, self.rows = [], []
         self.count = 0
@@ -179,52 +325,73 @@ class _Sensors:
         self.count += 1
 
     def forces(self):
-        x = np.array(self.rows).reshape(len(self.rows), self.probe.size)
+        P = self.P
+        y = np.array(self.rows).reshape(len(self.rows), self.probe.size)
         where = {int(b): i for i, b in enumerate(self.probe)}
-        out = np.zeros((x.shape[0], self.balls.size, 2))
-        for s, ball in enumerate(self.balls - 1):
+        out = np.zeros((y.shape[0], self.balls.size, 2))
+        for s, ball in enumerate(self.balls - 1 + P.lw):
             for side, (a, b) in enumerate(((ball - 1, ball), (ball, ball + 1))):
-                if a >= 0 and b < self.n:
+                if a >= 0 and b < P.nb:
                     out[:, s, side] = contact_forces(
-                        np.stack([x[:, where[a]], x[:, where[b]]], axis=-1), self.alpha)[:, 0]
-        return np.array(self.times), out
+                        np.stack([y[:, where[a]], y[:, where[b]]], axis=-1),
+                        P.alpha[a], P.kappa[a])[:, 0]
+        return np.array(self.times) * P.scales.time, out * P.scales.force
 
 
-def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
-        on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None) -> Solution:
+def run(n, k, alpha, times=(), **kw) -> Solution:
     """See ``chainrun.solver.simulate``."""
-    n, k, alpha, times = _check_inputs(n, k, alpha, times, t_end, rtol, max_events)
-    sensor_balls, sensor_dt = _check_sensors(sensors, sensor_dt, n)
-    S = _new_state(n, k, alpha, rtol, t_end, max_events)
+    n, k, alpha = _check_paper(n, k, alpha)
+    return run_line(Line.paper(n, k, alpha), times, **kw)
+
+
+def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
+             on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None) -> Solution:
+    """See ``chainrun.solver.simulate_line``: the run in the units of the line's scales,
+    its inputs and results converted at the edges."""
+    if not isinstance(line, Line):
+        raise TypeError(f"expected a chainrun.solver.Line, got {type(line).__name__}")
+    times = _check_inputs(times, t_end, rtol, max_events)
+    if t_end is None and not line.has_terminal_state:
+        raise ValueError("this line has no terminal state (an external force keeps "
+                         "doing work, or walls hold it at both ends): give t_end")
+    sensor_balls, sensor_dt = _check_sensors(sensors, sensor_dt, line.n)
+    P = _Prepared(line)
+    sc = P.scales
+    tscale = sc.time
+    S = _line_state(P, rtol, None if t_end is None else t_end / tscale, max_events)
     load_kernels(S)
     wall0 = time.perf_counter()
+    n = line.n
     nt = times.size
+    inner_times = times / tscale
     keep = on_snapshot is None
     positions = np.empty((nt, n)) if keep else None
     velocities = np.empty((nt, n)) if keep else None
 
     def emit(i, t):
+        x = P.positions(S.ox)
+        v = P.velocities(S.ov)
         if keep:
-            positions[i] = S.ox
-            velocities[i] = S.ov
+            positions[i] = x
+            velocities[i] = v
         else:
-            on_snapshot(i, float(t), S.ox, S.ov)
+            on_snapshot(i, float(t), x, v)
 
     ev_t, ev_j, ev_k = [], [], []
 
     def flush():
         m = int(S.ints[_state.I_NEV])
-        ev_t.append(S.ev_t[:m].copy())
-        ev_j.append(S.ev_j[:m].copy())
+        ev_t.append(S.ev_t[:m] * tscale)
+        ev_j.append(S.ev_j[:m] - P.lw)
         ev_k.append(S.ev_k[:m].copy())
         S.ints[_state.I_NEV] = 0
 
-    sensing = _Sensors(sensor_balls, sensor_dt, n, alpha)
+    sensing = _Sensors(sensor_balls, None if sensor_dt is None else sensor_dt / tscale, P)
     nout = 0
 
     def request():
         """Ask the kernel for the next snapshot (1) or sensor sample (2), the earlier."""
-        t_snap = times[nout] if nout < nt else math.inf
+        t_snap = inner_times[nout] if nout < nt else math.inf
         t_sample = sensing.next_time()
         if t_sample > S.fs[_state.F_TEND]:
             t_sample = math.inf
@@ -254,7 +421,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
                     sensing.take(tout, sensing.buffer)
             request()
             if on_progress is not None:
-                on_progress(float(S.fs[_state.F_T]))
+                on_progress(float(S.fs[_state.F_T]) * tscale)
         elif status == _state.ST_FLUSH:
             flush()
         elif status == _state.ST_GROW:
@@ -262,12 +429,12 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
             if need <= 0:
                 raise RuntimeError(
                     f"internal error: contact states did not settle at "
-                    f"t = {S.fs[_state.F_T]!r} "
-                    f"({_window_text(S)}); please report this with the config")
+                    f"t = {S.fs[_state.F_T] * tscale!r} "
+                    f"({_window_text(S, P)}); please report this with the config")
             S = _grow(S, need)
         elif status == _state.ST_YIELD:
             if on_progress is not None:
-                on_progress(float(S.fs[_state.F_T]))
+                on_progress(float(S.fs[_state.F_T]) * tscale)
         else:
             break
     flush()
@@ -275,7 +442,7 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
     t_final = float(S.fs[_state.F_T])
     # snapshots after the terminal state are free flight; the kernel evaluates them
     while status == _state.ST_TERMINAL and nout < nt:
-        _loop._snapshot(S, times[nout])
+        _loop._snapshot(S, inner_times[nout])
         emit(nout, times[nout])
         nout += 1
     # samples up to the end of the run (its last instant included)
@@ -284,54 +451,81 @@ def run(n, k, alpha, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None
         sensing.take(sensing.next_time(), sensing.buffer)
     sensor_time, sensor_force = sensing.forces()
     _loop._snapshot(S, t_final)
-    x_final = S.ox.copy()
+    y_final = S.ox.copy()
     v_final = S.ov.copy()
     wall = time.perf_counter() - wall0
 
-    p_err = abs(float(momentum(v_final)) - k)
-    e0 = 0.5 * k
-    e1 = float(kinetic_energy(v_final) + potential_energy(x_final, alpha))
     event_time = np.concatenate(ev_t)
-    message = _message(outcome, t_final, int(S.ints[_state.I_EVTOTAL]), S)
-    diagnostics = Diagnostics(
+    message = _message(outcome, t_final * tscale, int(S.ints[_state.I_EVTOTAL]), S, P)
+    diagnostics = _diagnostics(P, S, y_final, v_final, t_final, wall, rtol,
+                               int(event_time.size))
+    moving = np.flatnonzero(line.velocity != 0.0)
+    alphas = np.concatenate([line.alpha, [w.alpha for w in line.walls if w is not None]])
+    return Solution(
+        n=n, k=int(moving.size),
+        alpha=float(alphas[0]) if alphas.size and np.all(alphas == alphas[0]) else math.nan,
+        outcome=outcome, message=message,
+        end_time=t_final * tscale, terminal=outcome is Outcome.TERMINAL,
+        final_position=P.positions(y_final), final_velocity=P.velocities(v_final),
+        separation_time=S.sep_t[P.balls] * tscale,
+        separation_velocity=S.sep_v[P.balls] * sc.velocity,
+        event_time=event_time, event_contact=np.concatenate(ev_j),
+        event_kind=np.concatenate(ev_k),
+        times=times, positions=positions, velocities=velocities,
+        diagnostics=diagnostics, sensor_balls=sensor_balls, sensor_time=sensor_time,
+        sensor_force=sensor_force, line=line,
+    )
+
+
+def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
+    """Conservation checks in the units of the scales (those of the paper for its line).
+
+    Momentum changes by the external forces' impulse, ``sum f t``; with a wall it is
+    not checked (the wall's impulse is not tracked), and its error is NaN. Energy:
+    kinetic plus contact energy less the external forces' work is conserved; the errors
+    are relative to the initial energy (or, for a line starting at rest, to the work).
+    """
+    m = P.mass
+    if P.unit and P.lw == 0 and P.rw == 0 and P.mode != _state.MODE_MIXED \
+            and np.all(P.kappa == 1.0) and np.all(P.y0 == 0.0):
+        # the paper's line: momentum sum v, energy sum v^2/2 + contacts, as ever
+        p_err = abs(float(momentum(v)) - float(momentum(P.v0)))
+        e0 = float(kinetic_energy(P.v0))
+        e1 = float(kinetic_energy(v) + potential_energy(y, P.alpha0))
+        scale = e0
+    else:
+        if P.lw or P.rw:
+            p_err = math.nan
+        else:
+            p_exp = float(np.sum(m * P.v0)) + float(np.sum(m * P.acc)) * t
+            p_err = abs(float(np.sum(m * v)) - p_exp)
+        e0 = P.energy(P.y0, P.v0)
+        e1 = P.energy(y, v)
+        work = abs(float(np.sum(m * P.acc * (y - P.y0))))
+        scale = max(abs(e0), work)
+    if not scale > 0.0:
+        scale = 1.0
+    return Diagnostics(
         steps=int(S.ints[_state.I_STEPS]),
         rejected_steps=int(S.ints[_state.I_REJ]),
-        events=int(event_time.size),
+        events=events,
         momentum_error=p_err,
-        energy_error=abs(e1 - e0) / e0,
-        energy_correction=float(S.fs[_state.F_EPROJ]) / e0,
+        energy_error=abs(e1 - e0) / scale,
+        energy_correction=float(S.fs[_state.F_EPROJ]) / scale,
         wall_time=wall,
         max_window=int(S.ints[_state.I_MAXWIN]),
         rtol=float(rtol),
         velocity_floor=velocity_floor(rtol),
     )
-    return Solution(
-        n=n, k=k, alpha=alpha, outcome=outcome, message=message,
-        end_time=t_final, terminal=outcome is Outcome.TERMINAL,
-        final_position=x_final, final_velocity=v_final,
-        separation_time=S.sep_t.copy(), separation_velocity=S.sep_v.copy(),
-        event_time=event_time, event_contact=np.concatenate(ev_j),
-        event_kind=np.concatenate(ev_k),
-        times=times, positions=positions, velocities=velocities,
-        diagnostics=diagnostics, sensor_balls=sensor_balls, sensor_time=sensor_time,
-        sensor_force=sensor_force,
-    )
 
 
-def run_line(line, times=(), **kw) -> Solution:
-    """See ``chainrun.solver.simulate_line``."""
-    if not line.is_paper:
-        raise NotImplementedError("general lines are not wired into the kernels yet")
-    k = int(np.count_nonzero(line.velocity))
-    return run(line.n, k, float(line.alpha[0]) if line.n > 1 else 1.5, times, **kw)
-
-
-def _message(outcome: Outcome, t: float, events: int, S: _state.State) -> str:
+def _message(outcome: Outcome, t: float, events: int, S: _state.State,
+             P: _Prepared) -> str:
     if outcome is Outcome.TERMINAL:
         return f"terminal state reached at t = {t:.6g} after {events} events"
     if outcome is Outcome.STOP_TIME:
         return f"stopped at t_end = {t:.6g} after {events} events"
-    where = _window_text(S)
+    where = _window_text(S, P)
     if outcome is Outcome.EVENT_LIMIT:
         return f"event limit ({events}) reached at t = {t:.6g}, {where}"
     if outcome is Outcome.NON_FINITE:
@@ -339,10 +533,18 @@ def _message(outcome: Outcome, t: float, events: int, S: _state.State) -> str:
     return f"step size underflow at t = {t:.6g}, {where}"
 
 
-def _window_text(S: _state.State) -> str:
+def _window_text(S: _state.State, P: _Prepared) -> str:
     ncl = int(S.ints[_state.I_NCL])
     if ncl == 0:
         return "no ball in contact"
-    parts = [f"balls {S.clo[c] + 1}-{S.chi[c] + 1}" for c in range(min(ncl, 3))]
+
+    def ball(i):
+        if i < P.lw:
+            return "the left wall"
+        if i >= P.lw + P.n:
+            return "the right wall"
+        return str(i - P.lw + 1)
+
+    parts = [f"balls {ball(S.clo[c])}-{ball(S.chi[c])}" for c in range(min(ncl, 3))]
     more = f" and {ncl - 3} more clusters" if ncl > 3 else ""
     return "moving clusters: " + ", ".join(parts) + more

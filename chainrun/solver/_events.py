@@ -24,9 +24,9 @@ from chainrun.solver._compression import (
 from chainrun.solver._generated import _series_bounds
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    ACTIVE, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH, F_EPSREL,
-    F_FLOOR, F_HLAST, F_LDORM, F_LLOCATE, F_TPREV, HI_ROW, I_EVTOTAL, I_M, I_NCL, I_NEV,
-    I_TAY, LO_ROW, N_SAMPLES, N_SERIES_SAMPLES, OPEN, _tw,
+    ACTIVE, C_DORM, C_EPS, C_LOC, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE,
+    FRESH, F_FLOOR, F_HLAST, HI_ROW, I_EVTOTAL, I_M, I_NCL, I_NEV, I_TAY, LO_ROW,
+    N_SAMPLES, N_SERIES_SAMPLES, OPEN, _tw,
 )
 from chainrun.solver._steppers import _ball_at, _ball_end
 
@@ -118,7 +118,7 @@ def _contact_event(S, j, hcap):
     if st == FRESH:
         # a series step is long enough for a fresh contact to be pressed beyond
         # eps_rel and to open again inside it: that opening is located
-        lev1 = S.fs[F_EPSREL]
+        lev1 = S.cp[C_EPS, j]
         lev2 = lev1
     elif st == ACTIVE:
         lev1 = 0.0
@@ -126,10 +126,10 @@ def _contact_event(S, j, hcap):
     elif st == DORMANT:
         # a dormant contact pressed slowly engages at the step's end (_post_step): its
         # force below FORCE_LOCATE is far under rounding; only a fast press is located
-        if c1 < S.fs[F_LLOCATE]:
+        if c1 < S.cp[C_LOC, j]:
             return 2.0, 0, 0.0
-        lev1 = S.fs[F_LDORM]
-        lev2 = -S.fs[F_EPSREL]
+        lev1 = S.cp[C_DORM, j]
+        lev2 = -S.cp[C_EPS, j]
     else:
         lev1 = 0.0
         lev2 = S.lvl[j]
@@ -248,7 +248,7 @@ def _find_event(S):
     W = S.TW
     if tay:
         _series_bounds(W, S.ints[I_M] - 1, h)
-    epsrel = S.fs[F_EPSREL]
+    EPSREL = S.cp[C_EPS]
     X, X0, A, A0 = S.X, S.X0, S.A, S.A0
     for c in range(S.ints[I_NCL]):
         lo = S.clo[c]
@@ -263,7 +263,7 @@ def _find_event(S):
                 # eps_rel): can it open in this step?
                 p = o + j
                 if tay:
-                    if W[_tw(p, LO_ROW)] > 0.0 or (st == FRESH and W[_tw(p, HI_ROW)] < epsrel):
+                    if W[_tw(p, LO_ROW)] > 0.0 or (st == FRESH and W[_tw(p, HI_ROW)] < EPSREL[j]):
                         continue
                 elif st == FRESH:
                     continue  # checked at the step's end (_release_quiet)
@@ -282,7 +282,7 @@ def _find_event(S):
                 cq0 = _contact_end(S, j, 0.0)[0]
                 cq1 = _contact_end(S, j, 1.0)[0]
                 if st == DORMANT:
-                    if cq1 < S.fs[F_LLOCATE]:
+                    if cq1 < S.cp[C_LOC, j]:
                         continue
                 elif st == OPEN:
                     if tay:

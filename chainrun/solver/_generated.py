@@ -16,8 +16,8 @@ import numpy as np
 from chainrun.solver._forces import _accelerations, _forces
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, J_OVER_K, LO_ROW, SERIES_SCALE,
-    SERIES_TILE, TILE_STRIDE, _find_cluster, _tw,
+    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, I_UNIT, J_OVER_K, LO_ROW,
+    SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,
 )
 
 
@@ -32,47 +32,48 @@ def _stages(S, h):
     m = S.ints[I_M]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    F, MK = S.FS, S.TR
+    unit = S.ints[I_UNIT] == 1
+    F, MK, WP = S.FS, S.TR, S.WP
     KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V
     for p in range(m):
         KV[0, p] = A0[p]
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * V0[p])
-    _accelerations(X, F, MK, KV[1], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[1], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.0789002279381516 * V0[p] + h * (0.003112622984346139 * KV[0, p]))
-    _accelerations(X, F, MK, KV[2], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[2], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.1183503419072274 * V0[p] + h * (0.0017508504286947032 * KV[0, p] + 0.00525255128608411 * KV[1, p]))
-    _accelerations(X, F, MK, KV[3], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[3], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971964 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
-    _accelerations(X, F, MK, KV[4], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[4], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.3333333333333333 * V0[p] + h * (0.03533793130488635 * KV[0, p] + -0.09581915952175495 * KV[2, p] + 0.11603678377242414 * KV[3, p]))
-    _accelerations(X, F, MK, KV[5], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[5], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.25 * V0[p] + h * (0.018920483189113914 * KV[0, p] + -0.03815245266364541 * KV[2, p] + 0.05268745617004205 * KV[3, p] + -0.00220548669551055 * KV[4, p]))
-    _accelerations(X, F, MK, KV[6], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[6], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
-    _accelerations(X, F, MK, KV[7], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[7], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622033 * KV[0, p] + 0.46966087733519885 * KV[2, p] + -0.06814140470279369 * KV[3, p] + 0.01071185753171531 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
-    _accelerations(X, F, MK, KV[8], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[8], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377502 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.07865735349516391 * KV[3, p] + 0.030838873981239242 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
-    _accelerations(X, F, MK, KV[9], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[9], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.3721894995071433 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.4614987464855827 * KV[3, p] + -0.06518509348541897 * KV[4, p] + 4.098038403866562 * KV[5, p] + 3.8922102844072377 * KV[6, p] + -7.025278165955339 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
-    _accelerations(X, F, MK, KV[10], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[10], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382327 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931152 * KV[3, p] + 0.23253698859550578 * KV[4, p] + 11.903719357881853 * KV[5, p] + -1.9034949405460306 * KV[6, p] + -10.951226401858388 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
-    _accelerations(X, F, MK, KV[11], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[11], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.96687526183494 * KV[5, p] + 1.4186384244858756 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.06086437986500647 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
-    _accelerations(X, F, MK, KV[12], m, mode, alpha)
+    _accelerations(X, F, MK, WP, KV[12], m, mode, alpha, unit)
 
 
 @kernel
@@ -115,18 +116,19 @@ def _dense_stages(S):
     m = S.ints[I_M]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    F, MK = S.FS, S.TR
+    unit = S.ints[I_UNIT] == 1
+    F, MK, WP = S.FS, S.TR, S.WP
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
         Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776213 * KV[0, p] + -0.41267006753617264 * KV[5, p] + -0.11888400830261192 * KV[6, p] + 0.5112504000718059 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.003198200361512927 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
-    _accelerations(Xs, F, MK, KV[13], m, mode, alpha)
+    _accelerations(Xs, F, MK, WP, KV[13], m, mode, alpha, unit)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
-    _accelerations(Xs, F, MK, KV[14], m, mode, alpha)
+    _accelerations(Xs, F, MK, WP, KV[14], m, mode, alpha, unit)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.35886633997225575 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.024882489771726926 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
-    _accelerations(Xs, F, MK, KV[15], m, mode, alpha)
+    _accelerations(Xs, F, MK, WP, KV[15], m, mode, alpha, unit)
 
 
 @kernel
@@ -140,7 +142,7 @@ def _dense_ball(S, p):
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     h = S.fs[F_HLAST]
-    KV, X0, V0, Xs, F, MK = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR
+    KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP
     c = _find_cluster(S, S.cb[p])
     o = S.coff[c]
     e = o + S.chi[c] - S.clo[c]
@@ -148,23 +150,23 @@ def _dense_ball(S, p):
     hi = min(e, p + 3)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776213 * KV[0, q] + -0.41267006753617264 * KV[5, q] + -0.11888400830261192 * KV[6, q] + 0.5112504000718059 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.003198200361512927 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
-    _forces(Xs, F, MK, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
-        KV[13, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+        KV[13, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
     lo = max(o, p - 2)
     hi = min(e, p + 2)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.2 * V0[q] + h * (0.009887781381457055 * KV[0, q] + -0.00760250313479944 * KV[5, q] + 0.047423345887574166 * KV[6, q] + -0.0363790659291871 * KV[7, q] + -0.021320408140087014 * KV[8, q] + 0.026772748548590852 * KV[9, q] + 0.0013364963323445063 * KV[10, q] + 0.001054215711719072 * KV[11, q] + -0.0011726106576121006 * KV[12, q]))
-    _forces(Xs, F, MK, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
-        KV[14, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+        KV[14, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
     lo = max(o, p - 1)
     hi = min(e, p + 1)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.35886633997225575 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.024882489771726926 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
-    _forces(Xs, F, MK, lo, hi, mode, alpha)
+    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
-        KV[15, q] = (F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)
+        KV[15, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
 
 
 @kernel(inline="always")
@@ -183,7 +185,7 @@ def _dense_rows(S, p):
 
 
 @kernel(fastmath={"contract"})
-def _series_orders(TX, W, nc, m, alpha):
+def _series_orders(TX, W, IM, nc, m, alpha):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
@@ -289,7 +291,152 @@ def _series_orders(TX, W, nc, m, alpha):
         for p in range(m):
             fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
             fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-            TX[k + 2, p] = (fl - fr) * s
+            TX[k + 2, p] = (fl - fr) * s * IM[p]
+    # the compressions' last two orders, for the bounds (_series_bounds)
+    for p in range(nc):
+        W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
+        W[_tw(p, 24)] = TX[24, p] - TX[24, p + 1]
+
+
+@kernel(fastmath={"contract"})
+def _series_orders_mixed(TX, W, IM, AL, nc, m):
+    """Orders 1 and up of the force series, each lane its own alpha (see _taylor)."""
+    nt = (nc + SERIES_TILE - 1) // SERIES_TILE
+    f0 = 25  # row of f_0
+    for k in range(1, 23):
+        for p in range(nc):
+            W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]
+        for t in range(nt):
+            o = t * TILE_STRIDE
+            c = o + k * SERIES_TILE
+            f = o + f0 * SERIES_TILE
+            a0 = AL[t * SERIES_TILE + 0]
+            a1 = AL[t * SERIES_TILE + 1]
+            a2 = AL[t * SERIES_TILE + 2]
+            a3 = AL[t * SERIES_TILE + 3]
+            a4 = AL[t * SERIES_TILE + 4]
+            a5 = AL[t * SERIES_TILE + 5]
+            a6 = AL[t * SERIES_TILE + 6]
+            a7 = AL[t * SERIES_TILE + 7]
+            a8 = AL[t * SERIES_TILE + 8]
+            a9 = AL[t * SERIES_TILE + 9]
+            a10 = AL[t * SERIES_TILE + 10]
+            a11 = AL[t * SERIES_TILE + 11]
+            a12 = AL[t * SERIES_TILE + 12]
+            a13 = AL[t * SERIES_TILE + 13]
+            a14 = AL[t * SERIES_TILE + 14]
+            a15 = AL[t * SERIES_TILE + 15]
+            b0 = a0 + 1.0
+            b1 = a1 + 1.0
+            b2 = a2 + 1.0
+            b3 = a3 + 1.0
+            b4 = a4 + 1.0
+            b5 = a5 + 1.0
+            b6 = a6 + 1.0
+            b7 = a7 + 1.0
+            b8 = a8 + 1.0
+            b9 = a9 + 1.0
+            b10 = a10 + 1.0
+            b11 = a11 + 1.0
+            b12 = a12 + 1.0
+            b13 = a13 + 1.0
+            b14 = a14 + 1.0
+            b15 = a15 + 1.0
+            e0 = a0 * W[c + 0] * W[f + 0]
+            e1 = a1 * W[c + 1] * W[f + 1]
+            e2 = a2 * W[c + 2] * W[f + 2]
+            e3 = a3 * W[c + 3] * W[f + 3]
+            e4 = a4 * W[c + 4] * W[f + 4]
+            e5 = a5 * W[c + 5] * W[f + 5]
+            e6 = a6 * W[c + 6] * W[f + 6]
+            e7 = a7 * W[c + 7] * W[f + 7]
+            e8 = a8 * W[c + 8] * W[f + 8]
+            e9 = a9 * W[c + 9] * W[f + 9]
+            e10 = a10 * W[c + 10] * W[f + 10]
+            e11 = a11 * W[c + 11] * W[f + 11]
+            e12 = a12 * W[c + 12] * W[f + 12]
+            e13 = a13 * W[c + 13] * W[f + 13]
+            e14 = a14 * W[c + 14] * W[f + 14]
+            e15 = a15 * W[c + 15] * W[f + 15]
+            d0 = 0.0
+            d1 = 0.0
+            d2 = 0.0
+            d3 = 0.0
+            d4 = 0.0
+            d5 = 0.0
+            d6 = 0.0
+            d7 = 0.0
+            d8 = 0.0
+            d9 = 0.0
+            d10 = 0.0
+            d11 = 0.0
+            d12 = 0.0
+            d13 = 0.0
+            d14 = 0.0
+            d15 = 0.0
+            for j in range(1, k, 2):
+                jk = J_OVER_K[k, j]
+                c = o + j * SERIES_TILE
+                f = o + (f0 + k - j) * SERIES_TILE
+                d0 += (b0 * jk - 1.0) * W[c + 0] * W[f + 0]
+                d1 += (b1 * jk - 1.0) * W[c + 1] * W[f + 1]
+                d2 += (b2 * jk - 1.0) * W[c + 2] * W[f + 2]
+                d3 += (b3 * jk - 1.0) * W[c + 3] * W[f + 3]
+                d4 += (b4 * jk - 1.0) * W[c + 4] * W[f + 4]
+                d5 += (b5 * jk - 1.0) * W[c + 5] * W[f + 5]
+                d6 += (b6 * jk - 1.0) * W[c + 6] * W[f + 6]
+                d7 += (b7 * jk - 1.0) * W[c + 7] * W[f + 7]
+                d8 += (b8 * jk - 1.0) * W[c + 8] * W[f + 8]
+                d9 += (b9 * jk - 1.0) * W[c + 9] * W[f + 9]
+                d10 += (b10 * jk - 1.0) * W[c + 10] * W[f + 10]
+                d11 += (b11 * jk - 1.0) * W[c + 11] * W[f + 11]
+                d12 += (b12 * jk - 1.0) * W[c + 12] * W[f + 12]
+                d13 += (b13 * jk - 1.0) * W[c + 13] * W[f + 13]
+                d14 += (b14 * jk - 1.0) * W[c + 14] * W[f + 14]
+                d15 += (b15 * jk - 1.0) * W[c + 15] * W[f + 15]
+            for j in range(2, k, 2):
+                jk = J_OVER_K[k, j]
+                c = o + j * SERIES_TILE
+                f = o + (f0 + k - j) * SERIES_TILE
+                e0 += (b0 * jk - 1.0) * W[c + 0] * W[f + 0]
+                e1 += (b1 * jk - 1.0) * W[c + 1] * W[f + 1]
+                e2 += (b2 * jk - 1.0) * W[c + 2] * W[f + 2]
+                e3 += (b3 * jk - 1.0) * W[c + 3] * W[f + 3]
+                e4 += (b4 * jk - 1.0) * W[c + 4] * W[f + 4]
+                e5 += (b5 * jk - 1.0) * W[c + 5] * W[f + 5]
+                e6 += (b6 * jk - 1.0) * W[c + 6] * W[f + 6]
+                e7 += (b7 * jk - 1.0) * W[c + 7] * W[f + 7]
+                e8 += (b8 * jk - 1.0) * W[c + 8] * W[f + 8]
+                e9 += (b9 * jk - 1.0) * W[c + 9] * W[f + 9]
+                e10 += (b10 * jk - 1.0) * W[c + 10] * W[f + 10]
+                e11 += (b11 * jk - 1.0) * W[c + 11] * W[f + 11]
+                e12 += (b12 * jk - 1.0) * W[c + 12] * W[f + 12]
+                e13 += (b13 * jk - 1.0) * W[c + 13] * W[f + 13]
+                e14 += (b14 * jk - 1.0) * W[c + 14] * W[f + 14]
+                e15 += (b15 * jk - 1.0) * W[c + 15] * W[f + 15]
+            c = o + (f0 + k) * SERIES_TILE
+            f = o + 48 * SERIES_TILE
+            W[c + 0] = (e0 + d0) * W[f + 0]
+            W[c + 1] = (e1 + d1) * W[f + 1]
+            W[c + 2] = (e2 + d2) * W[f + 2]
+            W[c + 3] = (e3 + d3) * W[f + 3]
+            W[c + 4] = (e4 + d4) * W[f + 4]
+            W[c + 5] = (e5 + d5) * W[f + 5]
+            W[c + 6] = (e6 + d6) * W[f + 6]
+            W[c + 7] = (e7 + d7) * W[f + 7]
+            W[c + 8] = (e8 + d8) * W[f + 8]
+            W[c + 9] = (e9 + d9) * W[f + 9]
+            W[c + 10] = (e10 + d10) * W[f + 10]
+            W[c + 11] = (e11 + d11) * W[f + 11]
+            W[c + 12] = (e12 + d12) * W[f + 12]
+            W[c + 13] = (e13 + d13) * W[f + 13]
+            W[c + 14] = (e14 + d14) * W[f + 14]
+            W[c + 15] = (e15 + d15) * W[f + 15]
+        s = SERIES_SCALE[k]
+        for p in range(m):
+            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+            fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+            TX[k + 2, p] = (fl - fr) * s * IM[p]
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]

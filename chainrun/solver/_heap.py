@@ -8,8 +8,10 @@ its contact's stamp, and any change to either ball bumps the stamp
 
 from __future__ import annotations
 
+import numpy as np
+
 from chainrun.solver._jit import kernel
-from chainrun.solver._state import F_FLOOR, F_T, I_NHEAP, _find_cluster
+from chainrun.solver._state import B_ACC, F_FLOOR, F_T, I_NHEAP, _find_cluster, _free_at
 
 
 @kernel
@@ -104,15 +106,46 @@ def _heap_compact(S):
 
 @kernel
 def _schedule_pair(S, j):
-    """Predict the collision of free balls j, j+1 if they approach at >= floor."""
+    """Predict the collision of free balls j, j+1, if they ever meet approaching at >= floor.
+
+    Without external forces their gap closes at a constant rate; with them it is a
+    parabola, c(s) = c + w s + a s^2 / 2, and the collision its first root from below
+    (by the stable form of the quadratic formula). A meeting slower than the floor is
+    no collision, unless the balls are pressed together (a > 0), when it is one.
+    """
     if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
         return
     if _find_cluster(S, j) >= 0 or _find_cluster(S, j + 1) >= 0:
         return
-    w = S.bv[j] - S.bv[j + 1]
-    if not (w >= S.fs[F_FLOOR]):
-        return
     t = S.fs[F_T]
-    c = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
-    tc = t - c / w if c < 0.0 else t
-    _heap_push(S, tc, j)
+    floor = S.fs[F_FLOOR]
+    a = S.bp[B_ACC, j] - S.bp[B_ACC, j + 1]
+    if a == 0.0:
+        w = S.bv[j] - S.bv[j + 1]
+        if not (w >= floor):
+            return
+        c = (S.bx[j] + S.bv[j] * (t - S.bt[j])) - (S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1]))
+        tc = t - c / w if c < 0.0 else t
+        _heap_push(S, tc, j)
+        return
+    xl, vl = _free_at(S, j, t)
+    xr, vr = _free_at(S, j + 1, t)
+    c = xl - xr
+    w = vl - vr
+    if c >= 0.0:
+        if w >= floor or (w >= 0.0 and a > 0.0):
+            _heap_push(S, t, j)
+        return
+    d = w * w - 2.0 * a * c
+    if d < 0.0:
+        return  # decelerating: the gap never closes
+    q = -0.5 * (w + np.copysign(np.sqrt(d), w))  # roots q / (a/2) and c / q
+    s = np.inf
+    for r in (q / (0.5 * a) if q != 0.0 else np.inf, c / q if q != 0.0 else np.inf):
+        if r >= 0.0 and r < s:
+            s = r
+    if s == np.inf:
+        return
+    if not (w + a * s >= floor or a > 0.0):
+        return
+    _heap_push(S, t + s, j)

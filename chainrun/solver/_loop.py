@@ -22,12 +22,12 @@ from chainrun.solver._events import _find_event, _log, _rounding
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
 from chainrun.solver._state import (
-    ACTIVE, AFTER_EVENT, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH,
-    F_ALPHA, F_EPSREL, F_FLOOR, F_H, F_HLAST, F_LDORM, F_T, F_TEND, F_TOUT, F_TPREV,
-    F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_HAVEOUT, I_JUMP, I_M, I_MAXEV,
+    ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_DORM, C_EPS, C_KAPPA, DORMANT, EPS,
+    EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH, F_FLOOR, F_H, F_HLAST, F_T, F_TEND,
+    F_TOUT, F_TPREV, F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_HAVEOUT, I_JUMP, I_M, I_MAXEV,
     I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, PT, SERIES_CLUSTERS,
     ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
-    ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _tw,
+    ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import (
     _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at,
@@ -73,7 +73,7 @@ def _state_at(S, b, tout, th):
             return _taylor_at(S, p, th * S.fs[F_HLAST])
         _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
-    return S.bx[b] + S.bv[b] * (tout - S.bt[b]), S.bv[b]
+    return _free_at(S, b, tout)
 
 
 @entry
@@ -104,9 +104,9 @@ def _engage_level(S, j):
     rounding would flip the contact back and forth).
     """
     t = S.fs[F_T]
-    xl = S.bx[j] + S.bv[j] * (t - S.bt[j])
-    xr = S.bx[j + 1] + S.bv[j + 1] * (t - S.bt[j + 1])
-    return max(xl - xr, 0.0) + max(S.fs[F_EPSREL], 4.0 * _rounding(abs(xl) + abs(xr)))
+    xl = _free_at(S, j, t)[0]
+    xr = _free_at(S, j + 1, t)[0]
+    return max(xl - xr, 0.0) + max(S.cp[C_EPS, j], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
 @kernel
@@ -135,7 +135,6 @@ def _season(S):
     and passes on within a few steps, each of which may end on an event or an
     engagement at the front.
     """
-    epsrel = S.fs[F_EPSREL]
     tay = S.ints[I_TAY] == 1 and S.ints[I_JUMP] == 0
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
@@ -143,6 +142,7 @@ def _season(S):
         for j in range(lo, S.chi[c]):
             if S.cst[j] == FRESH:
                 p = o + j - lo
+                epsrel = S.cp[C_EPS, j]
                 if S.X[p] - S.X[p + 1] > epsrel:
                     S.cst[j] = ACTIVE
                 elif tay and S.TW[_tw(p, HI_ROW)] > epsrel and _pressed_in_step(S, j):
@@ -156,14 +156,13 @@ def _release_quiet(S):
     """Release the contacts below the floor.
 
     A seasoned contact is released when its relative motion and stored energy could
-    not produce a speed above the floor (w^2 + 4 c^(alpha+1)/(alpha+1) < floor^2) and
-    its neighbours do not load it (|c''| < floor). A fresh contact (at the front of a
+    not produce a speed above the floor (w^2 + 2 kappa c^(alpha+1) / ((alpha+1) mu) <
+    floor^2, mu the pair's reduced mass: 1/2 for the paper's balls, a ball's mass
+    against a wall) and its neighbours do not load it (|c''| < floor). A fresh contact (at the front of a
     wave, never pressed beyond eps_rel) is released only when pulled apart beyond
     the rounding of its positions; it carried no force above the floor.
     """
     floor = S.fs[F_FLOOR]
-    epsrel = S.fs[F_EPSREL]
-    alpha = S.fs[F_ALPHA]
     nrel = 0
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]
@@ -176,12 +175,14 @@ def _release_quiet(S):
                 if cj < -_rounding(abs(S.X[p]) + abs(S.X[p + 1])):
                     S.jbuf[nrel] = j
                     nrel += 1
-            elif st == ACTIVE and cj < epsrel:
+            elif st == ACTIVE and cj < S.cp[C_EPS, j]:
                 w = S.V[p] - S.V[p + 1]
                 if abs(w) >= floor or abs(S.A[p] - S.A[p + 1]) >= floor:
                     continue
                 cp = cj if cj > 0.0 else 0.0
-                if w * w + 4.0 * cp ** (alpha + 1.0) / (alpha + 1.0) < floor * floor:
+                a = S.cp[C_ALPHA, j]
+                im = S.bp[B_IM, j] + S.bp[B_IM, j + 1]
+                if w * w + 2.0 * im * S.cp[C_KAPPA, j] * cp ** (a + 1.0) / (a + 1.0) < floor * floor:
                     S.jbuf[nrel] = j
                     nrel += 1
     if nrel == 0:
@@ -205,12 +206,12 @@ def _due(S, j):
     of their level, possibly just past it, where no crossing will ever be seen.
     """
     t = S.fs[F_T]
-    dl = S.bv[j] * (t - S.bt[j])
-    dr = S.bv[j + 1] * (t - S.bt[j + 1])
+    dl, vl = _flight(S, j, t)
+    dr, vr = _flight(S, j + 1, t)
     xl = S.bx[j] + dl
     xr = S.bx[j + 1] + dr
     c = xl - xr
-    w = S.bv[j] - S.bv[j + 1]
+    w = vl - vr
     # the rounding of a free ball's x + v (t - tref) comes from its terms, not its value;
     # and t itself is resolved only to EPS t, in which balls closing at w move w EPS t:
     # a gap that closes within that is closed now (else it opens and closes forever)
@@ -223,9 +224,9 @@ def _due(S, j):
         if c < -r:
             return EV_RELEASE
     elif st == DORMANT:
-        if c >= S.fs[F_LDORM]:
+        if c >= S.cp[C_DORM, j]:
             return EV_ENGAGE
-        if c <= -S.fs[F_EPSREL]:
+        if c <= -S.cp[C_EPS, j]:
             return EV_RELEASE
     else:
         if c >= -r and w >= S.fs[F_FLOOR]:
@@ -246,7 +247,7 @@ def _dormant_due(S):
             xl, vl, al = _ball_now(S, j)
             xr, vr, ar = _ball_now(S, j + 1)
             cj = xl - xr
-            if cj >= S.fs[F_LDORM] or cj <= -S.fs[F_EPSREL]:
+            if cj >= S.cp[C_DORM, j] or cj <= -S.cp[C_EPS, j]:
                 return True
     return False
 
@@ -304,7 +305,8 @@ def _end_ball(S, b, t):
     p = S.bmap[b]
     if p >= 0:
         return S.X[p], S.V[p], S.A[p]
-    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b], 0.0
+    x, v = _free_at(S, b, t)
+    return x, v, S.bp[B_ACC, b]
 
 
 @entry

@@ -85,13 +85,13 @@ EV_OPEN = -1
 EV_CLOSE = 1
 EV_ENGAGE = 2
 
-#: a dormant contact engages where its force c^alpha would reach this (fs[F_LDORM] =
-#: FORCE_DORMANT^(1/alpha), 1e-24 for alpha = 1, 1e-16 for Hertz): far below rounding of
+#: a dormant contact engages where its force kappa c^alpha would reach this (cp[C_DORM] =
+#: (FORCE_DORMANT/kappa)^(1/alpha), 1e-24 for alpha = 1, 1e-16 for Hertz): far below rounding of
 #: order-1 velocities, it keeps subnormals out of the front, and the balls ahead of a
 #: wave, which it never moves, out of the window
 FORCE_DORMANT = 1e-24
 #: a dormant contact pressed at the end of a step less than FORCE_LOCATE^(1/alpha)
-#: (fs[F_LLOCATE], 1e-18 for alpha = 1, 1e-12 for Hertz) engages there without being
+#: (cp[C_LOC], 1e-18 for alpha = 1, 1e-12 for Hertz) engages there without being
 #: located: the force it missed, over a fraction of the step, is below FORCE_LOCATE
 FORCE_LOCATE = 1e-18
 EPS = 2.220446049250313e-16
@@ -100,8 +100,8 @@ N_SERIES_SAMPLES = 4 * N_SAMPLES  # on a series step, several DOP853 steps long
 # the series' work tiles TW (see _tw): lanes in tiles of SERIES_TILE, each tile holding
 # TILE_ROWS rows: the compressions' series c_k (rows k <= PT), the forces' f_k (rows
 # PT + 1 + k), 1 / c_0 (row 2 PT), and the bounds of the compression over a series step
-# (rows LO_ROW, HI_ROW, _series_bounds); TR holds each contact lane's mask (1 inside a
-# cluster, _rebuild)
+# (rows LO_ROW, HI_ROW, _series_bounds); TR holds each contact lane's stiffness inside
+# a cluster, and 0 from a cluster's last ball to the next's first (_rebuild)
 SERIES_TILE = 16
 LO_ROW = 2 * PT + 1
 HI_ROW = 2 * PT + 2
@@ -114,29 +114,49 @@ YIELD_STEPS = 20000
 
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
-F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_EPSREL, F_ALPHA, \
-    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_LDORM, F_LLOCATE, F_NFLOAT = range(19)
+F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_NFLOAT = range(16)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_DSTAMP, I_TAY, I_NINT = range(23)
+    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_NINT = range(24)
+
+# ---- the force laws (I_MODE) ----------------------------------------------------------
+MODE_LINEAR = 0  # every contact alpha = 1
+MODE_HERTZ = 1  # every contact alpha = 3/2
+MODE_POWER = 2  # every contact the same alpha, fs[F_ALPHA]
+MODE_MIXED = 3  # each contact its own alpha (WP[W_ALPHA] in the window)
+
+# ---- rows of the parameter arrays -----------------------------------------------------
+# per ball, bp: mass (0 for a wall), inverse mass (0 for a wall: it never moves), and
+# the constant acceleration of its external force (f / m)
+B_MASS, B_IM, B_ACC = range(3)
+# per contact, cp: stiffness, exponent, and the contact's thresholds: the compression
+# whose energy gives a relative speed of the floor (eps_rel, see _driver), and those
+# where its force reaches FORCE_DORMANT and FORCE_LOCATE
+C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC = range(5)
+# per compact ball, WP: inverse mass, external acceleration, mass, and the exponent of
+# the contact lane it starts (MODE_MIXED)
+W_IM, W_ACC, W_MASS, W_ALPHA = range(4)
 
 State = namedtuple(
     "State",
     [
-        # balls, shape (N,)
-        "bx", "bv", "bt", "sep_t", "sep_v", "bmap",
-        # contacts, shape (N-1,) (at least 1)
-        "cst", "lvl", "stamp",
+        # balls, shape (N,) (walls are balls of infinite mass at the ends); their
+        # parameters (bp, rows B_*)
+        "bx", "bv", "bt", "sep_t", "sep_v", "bmap", "bp",
+        # contacts, shape (N-1,) (at least 1); their parameters (cp, rows C_*)
+        "cst", "lvl", "stamp", "cp",
         # clusters: ball range, offset in the compact arrays, energy since the last change
         "clo", "chi", "coff", "cen",
         # compact (integrated) balls: state, step start, dense-stage positions (XS),
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
-        # the stamp of the step they were built for (DM, see _dense_at); the Taylor
+        # the stamp of the step they were built for (DM, see _dense_at), the balls'
+        # and lanes' parameters (WP, rows W_*; TR holds each lane's stiffness); the Taylor
         # series of the positions (TX), order-major (see _taylor), with the work tiles
         # of the compressions' and forces' series (TW, see _tw) and lane mask (TR),
         # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
-        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM",
+        "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM", "WP",
         "TX", "TW", "TR", "TD", "TS",
         # heap of free-pair collisions
         "hp_t", "hp_j", "hp_s",
@@ -171,3 +191,19 @@ def _find_cluster(S, b):
         else:
             return mid
     return -1
+
+
+@kernel(inline="always")
+def _flight(S, b, t):
+    """(displacement since bt, velocity) of free ball b at t: a parabola under its
+    constant acceleration (a straight line without one, to the same bits)."""
+    dt = t - S.bt[b]
+    g = S.bp[B_ACC, b]
+    return dt * (S.bv[b] + 0.5 * g * dt), S.bv[b] + g * dt
+
+
+@kernel(inline="always")
+def _free_at(S, b, t):
+    """(x, v) of free ball b at t."""
+    d, v = _flight(S, b, t)
+    return S.bx[b] + d, v

@@ -25,12 +25,14 @@ import numpy as np
 
 from chainrun.solver._forces import _force, _rhs
 from chainrun.solver._generated import (
-    _dense_ball, _dense_rows, _dense_stages, _error_norm, _series_orders, _stages,
+    _dense_ball, _dense_rows, _dense_stages, _error_norm, _series_orders,
+    _series_orders_mixed, _stages,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV, I_DENSE,
-    I_DSTAMP, I_M, I_MODE, I_TAY, PT, SERIES_TILE, TAYLOR_TOL, _NS, _tw,
+    B_ACC, EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV,
+    I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
+    TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
 )
 
 
@@ -43,8 +45,10 @@ def _taylor(S):
     time units inside a Hertz wave), so the series takes steps several times those of
     DOP853 at the same tolerance, and is its own dense output. The series of the
     accelerations follow from those of the positions: for f = c |c|^(alpha-1),
-    c f' = alpha c' f gives f_k = sum_{j=1..k} ((alpha+1) j - k) c_j f_{k-j} / (k c_0);
-    for alpha = 1, f = c (Jorba & Zou, see the module's references).
+    c f' = alpha c' f gives f_k = sum_{j=1..k} ((alpha+1) j - k) c_j f_{k-j} / (k c_0),
+    whatever the stiffness; for alpha = 1, f = kappa c (Jorba & Zou, see the module's
+    references). A ball's terms of order k + 2 are its net force's of order k over its
+    mass; its external force's acceleration adds to order 2 alone.
 
     The series are order-major (row k holds every ball's term of order k), and every
     loop runs across the window, clusters and all: the gap after a cluster's last ball
@@ -63,6 +67,7 @@ def _taylor(S):
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     TX, W, MK = S.TX, S.TW, S.TR
+    IM, GA, AL = S.WP[W_IM], S.WP[W_ACC], S.WP[W_ALPHA]
     X0, V0 = S.X0, S.V0
     for p in range(m):
         TX[0, p] = X0[p]
@@ -74,16 +79,16 @@ def _taylor(S):
         W[_tw(p, 2 * PT)] = 0.0
     for p in range(nc):
         c0 = X0[p] - X0[p + 1]
-        if c0 == 0.0 and MK[p] != 0.0 and mode != 0:
+        if c0 == 0.0 and MK[p] != 0.0 and mode != MODE_LINEAR:
             return 0.0
         W[_tw(p, 0)] = c0
-        W[_tw(p, f0)] = _force(c0, mode, alpha) * MK[p]
-        W[_tw(p, 2 * PT)] = MK[p] / c0 if MK[p] != 0.0 and mode != 0 else 0.0
+        W[_tw(p, f0)] = _force(c0, mode, AL[p] if mode == MODE_MIXED else alpha) * MK[p]
+        W[_tw(p, 2 * PT)] = 1.0 / c0 if MK[p] != 0.0 and mode != MODE_LINEAR else 0.0
     for p in range(m):
         fl = W[_tw(p - 1, f0)] if p > 0 else 0.0
         fr = W[_tw(p, f0)] if p < nc else 0.0
-        TX[2, p] = 0.5 * (fl - fr)
-    if mode == 0:
+        TX[2, p] = 0.5 * ((fl - fr) * IM[p] + GA[p])
+    if mode == MODE_LINEAR:
         for k in range(1, PT + 1):
             for p in range(nc):
                 W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]
@@ -92,9 +97,11 @@ def _taylor(S):
                 for p in range(m):
                     fl = W[_tw(p - 1, k)] * MK[p - 1] if p > 0 else 0.0
                     fr = W[_tw(p, k)] * MK[p] if p < nc else 0.0
-                    TX[k + 2, p] = (fl - fr) * s
+                    TX[k + 2, p] = (fl - fr) * s * IM[p]
+    elif mode == MODE_MIXED:
+        _series_orders_mixed(TX, W, IM, AL, nc, m)
     else:
-        _series_orders(TX, W, nc, m, alpha)
+        _series_orders(TX, W, IM, nc, m, alpha)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
@@ -247,8 +254,7 @@ def _ball_end(S, b, th):
         if th >= 1.0:
             return S.X[p], S.V[p]
         return S.X0[p], S.V0[p]
-    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
-    return S.bx[b] + S.bv[b] * (t - S.bt[b]), S.bv[b]
+    return _free_at(S, b, S.fs[F_TPREV] + th * S.fs[F_HLAST])
 
 
 @kernel(inline="always")
@@ -268,4 +274,5 @@ def _ball_now(S, b):
     p = S.bmap[b]
     if p >= 0:
         return S.X[p], S.V[p], S.A[p]
-    return S.bx[b] + S.bv[b] * (S.fs[F_T] - S.bt[b]), S.bv[b], 0.0
+    x, v = _free_at(S, b, S.fs[F_T])
+    return x, v, S.bp[B_ACC, b]

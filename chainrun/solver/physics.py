@@ -1,4 +1,4 @@
-"""Conserved quantities of the line, in paper units (pure numpy, any shape of batch).
+"""Forces and conserved quantities of the line (pure numpy, any shape of batch).
 
 The one home of the energy and momentum formulas; the solver's diagnostics, the run
 files' observables and the analysis all call these.
@@ -15,9 +15,14 @@ def compressions(x: np.ndarray) -> np.ndarray:
     return x[..., :-1] - x[..., 1:]
 
 
-def contact_forces(x: np.ndarray, alpha: float) -> np.ndarray:
-    """Force of each contact, ``c_+^alpha`` (it never pulls); shape (..., N-1)."""
-    return np.clip(compressions(x), 0.0, None) ** alpha
+def contact_forces(x: np.ndarray, alpha, stiffness=1.0) -> np.ndarray:
+    """Force of each contact, ``kappa c_+^alpha`` (it never pulls); shape (..., N-1).
+
+    ``alpha`` and ``stiffness`` are numbers or one per contact; the compressions are
+    the plain differences of ``x`` (positions measured with the gaps taken out).
+    """
+    f = np.clip(compressions(x), 0.0, None) ** alpha
+    return f if np.all(np.asarray(stiffness) == 1.0) else f * stiffness
 
 
 def momentum(v: np.ndarray) -> np.ndarray:
