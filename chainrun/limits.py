@@ -41,13 +41,14 @@ __all__ = [
 #: Bytes per ball of the solver's state (``_driver._new_state``): float64 ``bx, bv, bt,
 #: sep_t, sep_v, hp_t, ox, ov`` and int64 ``bmap, hp_j, hp_s, jbuf`` (12 x 8), ``freed``
 #: (2N int64: 16), one contact per ball (``cst`` int8, ``lvl`` float64, ``stamp`` int64:
-#: 17) and N/2 clusters (``clo, chi, coff`` int64 and ``cen`` float64: 16).
-STATE_BYTES_PER_BALL = 12 * 8 + 16 + 17 + 16
+#: 17), N/2 clusters (``clo, chi, coff`` int64 and ``cen`` float64: 16), and the balls'
+#: and contacts' parameters (``bp``: 3 x 8, ``cp``: 5 x 8).
+STATE_BYTES_PER_BALL = 12 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages x 8), ``FX, FV``
 #: (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work tiles ``TW`` (51 rows
-#: x 8) and lane mask ``TR`` (8).
-WINDOW_BYTES_PER_BALL = 10 * 8 + 16 * 8 + 2 * 7 * 8 + (25 + 51 + 1) * 8
+#: x 8), lane stiffnesses ``TR`` (8) and the balls' and lanes' parameters ``WP`` (4 x 8).
+WINDOW_BYTES_PER_BALL = 10 * 8 + 16 * 8 + 2 * 7 * 8 + (25 + 51 + 1) * 8 + 4 * 8
 #: Initial window (``_driver._INITIAL_WINDOW``); it grows with the width of the
 #: compressed region, which stays far below N (about N**(1/3) for alpha = 1).
 WINDOW_MIN = 256
