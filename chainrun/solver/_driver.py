@@ -263,6 +263,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     fs[_state.F_ALPHA] = P.alpha0
     ints[_state.I_MODE] = P.mode
     ints[_state.I_UNIT] = 1 if P.unit else 0
+    ints[_state.I_FORCED] = 1 if np.any(P.acc) else 0
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),

@@ -109,9 +109,10 @@ def _schedule_pair(S, j):
     """Predict the collision of free balls j, j+1, if they ever meet approaching at >= floor.
 
     Without external forces their gap closes at a constant rate; with them it is a
-    parabola, c(s) = c + w s + a s^2 / 2, and the collision its first root from below
-    (by the stable form of the quadratic formula). A meeting slower than the floor is
-    no collision, unless the balls are pressed together (a > 0), when it is one.
+    parabola, c(s) = c + w s + a s^2 / 2 (even for balls parting now: pressed together,
+    they meet again), and the collision is where it crosses 0 upwards (roots by the
+    stable form of the quadratic formula). A meeting slower than the floor is no
+    collision, unless the balls are pressed together (a > 0), when it is one.
     """
     if j < 0 or j >= S.cst.shape[0] or S.bmap.shape[0] < 2:
         return
@@ -132,20 +133,18 @@ def _schedule_pair(S, j):
     xr, vr = _free_at(S, j + 1, t)
     c = xl - xr
     w = vl - vr
-    if c >= 0.0:
-        if w >= floor or (w >= 0.0 and a > 0.0):
-            _heap_push(S, t, j)
+    if c >= 0.0 and (w >= floor or (w >= 0.0 and a > 0.0)):
+        _heap_push(S, t, j)
         return
     d = w * w - 2.0 * a * c
-    if d < 0.0:
-        return  # decelerating: the gap never closes
     q = -0.5 * (w + np.copysign(np.sqrt(d), w))  # roots q / (a/2) and c / q
-    s = np.inf
-    for r in (q / (0.5 * a) if q != 0.0 else np.inf, c / q if q != 0.0 else np.inf):
-        if r >= 0.0 and r < s:
-            s = r
-    if s == np.inf:
-        return
-    if not (w + a * s >= floor or a > 0.0):
+    if not (d >= 0.0 and q != 0.0):
+        return  # the gap never closes
+    r1 = q / (0.5 * a)
+    r2 = c / q
+    # the gap closes where it crosses 0 upwards: through the larger root when the
+    # relative acceleration presses the balls together, else the smaller
+    s = max(r1, r2) if a > 0.0 else min(r1, r2)
+    if not (s >= 0.0 and (w + a * s >= floor or a > 0.0)):
         return
     _heap_push(S, t + s, j)

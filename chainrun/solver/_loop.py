@@ -24,8 +24,8 @@ from chainrun.solver._jit import entry, kernel
 from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_DORM, C_EPS, C_KAPPA, DORMANT, EPS,
     EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH, F_FLOOR, F_H, F_HLAST, F_T, F_TEND,
-    F_TOUT, F_TPREV, F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_HAVEOUT, I_JUMP, I_M, I_MAXEV,
-    I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, PT, SERIES_CLUSTERS,
+    F_TOUT, F_TPREV, F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
+    I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, PT, SERIES_CLUSTERS,
     ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
     ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
@@ -367,8 +367,8 @@ def advance(S):
         if t >= tend:
             return ST_STOP_TIME
         if S.ints[I_NCL] == 0:
-            if tcol == np.inf:
-                return ST_TERMINAL
+            if tcol == np.inf and S.ints[I_FORCED] == 0:
+                return ST_TERMINAL  # (under external forces, free flight to tend)
             # free flight: jump straight to the next collision (or the stop time)
             tn = min(tcol, tend)
             S.fs[F_TPREV] = t

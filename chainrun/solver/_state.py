@@ -119,7 +119,7 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_NINT = range(24)
+    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_NINT = range(25)
 
 # ---- the force laws (I_MODE) ----------------------------------------------------------
 MODE_LINEAR = 0  # every contact alpha = 1
