@@ -272,7 +272,9 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
         cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp,
         clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
         **_alloc_window(min(nb, _INITIAL_WINDOW)),
-        hp_t=np.zeros(nb), hp_j=np.zeros(nb, np.int64), hp_s=np.zeros(nb, np.int64),
+        # every contact can be predicted twice (from the freed balls on either side)
+        hp_t=np.zeros(2 * nb), hp_j=np.zeros(2 * nb, np.int64),
+        hp_s=np.zeros(2 * nb, np.int64),
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
         ox=np.zeros(nb), ov=np.zeros(nb),

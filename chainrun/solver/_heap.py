@@ -120,8 +120,9 @@ def _schedule_pair(S, j):
         return
     t = S.fs[F_T]
     floor = S.fs[F_FLOOR]
-    a = S.bp[B_ACC, j] - S.bp[B_ACC, j + 1]
-    if a == 0.0:
+    ga = S.bp[B_ACC, j]
+    gb = S.bp[B_ACC, j + 1]
+    if ga == 0.0 and gb == 0.0:
         w = S.bv[j] - S.bv[j + 1]
         if not (w >= floor):
             return
@@ -133,8 +134,13 @@ def _schedule_pair(S, j):
     xr, vr = _free_at(S, j + 1, t)
     c = xl - xr
     w = vl - vr
+    a = ga - gb
     if c >= 0.0 and (w >= floor or (w >= 0.0 and a > 0.0)):
         _heap_push(S, t, j)
+        return
+    if a == 0.0:  # (the same acceleration: they close at a constant rate)
+        if c < 0.0 and w >= floor:
+            _heap_push(S, t - c / w, j)
         return
     d = w * w - 2.0 * a * c
     q = -0.5 * (w + np.copysign(np.sqrt(d), w))  # roots q / (a/2) and c / q
