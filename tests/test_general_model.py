@@ -319,9 +319,6 @@ def test_paper_lines_against_reference(n, k, alpha):
     assert abs(sol.end_time - r.end_time) <= TOL["reference_time"] * (1 + r.end_time)
 
 
-@pytest.mark.xfail(reason="simulate_line's paper-line shortcut runs the moving balls as "
-                          "the first k; the general kernels take any velocities",
-                   strict=False)
 @pytest.mark.parametrize("velocity", [[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0]])
 def test_paper_units_strikers_anywhere(velocity):
     # Unit masses and stiffnesses and velocities 0 or 1 in any order.
