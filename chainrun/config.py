@@ -1,7 +1,9 @@
 """Experiment files: the one schema for YAML and TOML, validation, and sweep expansion.
 
-This module owns turning config text into frozen, validated objects. Nothing else in
-chainrun parses experiment files, and the module reads nothing but the file it is given.
+This module owns turning config text into frozen, validated objects, and the ``Line``
+each run describes (``build_line``). Nothing else in chainrun parses experiment files,
+and the module reads nothing but the file it is given and the data files it names
+(``chainrun.generators``).
 
 The schema (TOML shown; YAML has the same structure)::
 
@@ -12,6 +14,12 @@ The schema (TOML shown; YAML has the same structure)::
     n = 5                            # balls, 1 <= n < 2**63 (memory is checked when run)
     k = 1                            # impacting balls at velocity 1, 1 <= k <= n
     alpha = 1.5                      # contact exponent, >= 1 (1 linear, 1.5 Hertz)
+    # any line (docs/guide.md): per ball mass, velocity (instead of k), force, and in SI
+    # diameter, material (or young, poisson, density); per contact stiffness, alpha
+    # (<= MAX_ALPHA), gap: a number, a list or a generator table (chainrun.generators);
+    # speed (with k), precompression; top-level units = "paper" | "si"
+    [walls.right]                    # optional, likewise [walls.left]
+    stiffness = 1.0                  # alpha, gap; or material (SI)
     [output]                         # optional
     times = [0.0, 5.0]               # or {start = 0, stop = 60, step = 5}, stop inclusive;
                                      # none after solver.t_end
