@@ -1,7 +1,9 @@
 """Experiment files: the one schema for YAML and TOML, validation, and sweep expansion.
 
-This module owns turning config text into frozen, validated objects. Nothing else in
-chainrun parses experiment files, and the module reads nothing but the file it is given.
+This module owns turning config text into frozen, validated objects, and the ``Line``
+each run describes (``build_line``). Nothing else in chainrun parses experiment files,
+and the module reads nothing but the file it is given and the data files it names
+(``chainrun.generators``).
 
 The schema (TOML shown; YAML has the same structure)::
 
@@ -12,6 +14,12 @@ The schema (TOML shown; YAML has the same structure)::
     n = 5                            # balls, 1 <= n < 2**63 (memory is checked when run)
     k = 1                            # impacting balls at velocity 1, 1 <= k <= n
     alpha = 1.5                      # contact exponent, >= 1 (1 linear, 1.5 Hertz)
+    # any line (docs/guide.md): per ball mass, velocity (instead of k), force, and in SI
+    # diameter, material (or young, poisson, density); per contact stiffness, alpha
+    # (<= MAX_ALPHA), gap: a number, a list or a generator table (chainrun.generators);
+    # speed (with k), precompression; top-level units = "paper" | "si"
+    [walls.right]                    # optional, likewise [walls.left]
+    stiffness = 1.0                  # alpha, gap; or material (SI)
     [output]                         # optional
     times = [0.0, 5.0]               # or {start = 0, stop = 60, step = 5}, stop inclusive;
                                      # none after solver.t_end
@@ -52,14 +60,20 @@ from pydantic import (
     Field,
     PrivateAttr,
     ValidationError,
+    PlainSerializer,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 from pydantic_core import PydanticCustomError
 
+from chainrun import generators
 from chainrun.errors import ConfigError
-from chainrun.solver import DEFAULT_RTOL
+from chainrun.generators import Values, ValuesError
+from chainrun.materials import MATERIALS
+from chainrun.solver import DEFAULT_RTOL, Line, Wall
+from chainrun.solver import physics
+from chainrun.solver.model import precompress
 
 
 @dataclass(frozen=True)
@@ -93,6 +107,16 @@ class RunSpec:
         the same computation.
     source_text : str
         The full text of the experiment file the run came from.
+    units : {"paper", "si"}
+        The units of the run's line, times and results.
+    chain : Chain or None
+        The run's chain (sweep values applied); None for the paper's line, which
+        ``n``, ``k`` and ``alpha`` describe whole.
+    walls : Walls or None
+
+    For a general line, ``k`` is the number of leading balls that move and ``alpha``
+    the contacts' exponent, NaN when it varies: what summaries show. The line itself
+    is ``line``.
     """
 
     experiment: str
@@ -110,11 +134,44 @@ class RunSpec:
     source_text: str = ""
     sensors: tuple[int, ...] = ()
     sensor_dt: float | None = None
+    units: str = "paper"
+    chain: Any = None
+    walls: Any = None
+
+    @property
+    def line(self) -> Line:
+        """The ``Line`` of this run, in its ``units``: built on first use (its arrays
+        are as long as the line), then kept.
+
+        Raises
+        ------
+        ConfigError
+            Values that the file's checks could not see (a generated array of a line
+            longer than ``CHECK_MAX_N``, a data file changed since it was read).
+        """
+        line = self.__dict__.get("_line")
+        if line is None:
+            if self.chain is None:
+                line = Line.paper(self.n, self.k, self.alpha)
+            else:
+                try:
+                    line = build_line(self.chain, self.walls or Walls(), self.units)
+                except LineError as exc:
+                    raise ConfigError(self.experiment, [
+                        _one_line(f"run {self.run_id}: {p.line()}") for p in exc.problems]) from None
+            object.__setattr__(self, "_line", line)  # a cache, not a field
+        return line
 
 
 __all__ = [
     "Chain",
     "Experiment",
+    "LineError",
+    "MAX_ALPHA",
+    "UNITS",
+    "WallSettings",
+    "Walls",
+    "build_line",
     "MAX_RUNS",
     "MAX_SNAPSHOTS",
     "Output",
@@ -133,10 +190,32 @@ SWEEPABLE_KEYS: dict[str, type] = {
     "chain.n": int,
     "chain.k": int,
     "chain.alpha": float,
+    "chain.mass": float,
+    "chain.stiffness": float,
+    "chain.gap": float,
+    "chain.force": float,
+    "chain.speed": float,
+    "chain.precompression": float,
+    "chain.diameter": float,
+    "walls.left.stiffness": float,
+    "walls.left.alpha": float,
+    "walls.left.gap": float,
+    "walls.right.stiffness": float,
+    "walls.right.alpha": float,
+    "walls.right.gap": float,
     "solver.rtol": float,
     "solver.t_end": float,
     "solver.max_events": int,
 }
+
+#: The units an experiment may be written in: the paper's (every coefficient 1), or SI.
+UNITS = ("paper", "si")
+#: Largest contact exponent: beyond it a contact stiffens so abruptly that the steps
+#: the solver needs to resolve it shrink without end.
+MAX_ALPHA = 10.0
+#: Longest line whose generated values (tables) are expanded and checked when the file
+#: is read; a longer one is checked when its run starts.
+CHECK_MAX_N = 10_000_000
 
 #: Most snapshot times a ``{start, stop, step}`` range may expand to.
 MAX_RANGE_TIMES = 10_000_000
@@ -294,23 +373,401 @@ _SCALAR_CHECKS = {int: _check_int, float: _check_float}
 # --- the models ---------------------------------------------------------------------------
 
 
+#: What each per-ball or per-contact key must satisfy: (lowest, strict, highest, what
+#: it is per). Checked on scalars as the file is read, and on every value once expanded.
+_RULES: dict[str, tuple[float | None, bool, float | None, str]] = {
+    "mass": (0.0, True, None, "ball"),
+    "stiffness": (0.0, True, None, "contact"),
+    "alpha": (1.0, False, MAX_ALPHA, "contact"),
+    "gap": (None, False, None, "contact"),
+    "velocity": (None, False, None, "ball"),
+    "force": (None, False, None, "ball"),
+    "diameter": (0.0, True, None, "ball"),
+    "young": (0.0, True, None, "ball"),
+    "poisson": (-1.0, True, 0.5, "ball"),
+    "density": (0.0, True, None, "ball"),
+}
+#: Keys of the chain that only SI experiments have (real spheres).
+_SI_KEYS = ("diameter", "material", "young", "poisson", "density")
+
+
+def _rule_reason(key: str, x: float) -> str | None:
+    """Why ``x`` breaks the rule of ``key`` (None if it does not)."""
+    low, strict, high, _ = _RULES[key]
+    if low is not None and (x <= low if strict else x < low):
+        return f"must be {'>' if strict else '>='} {_bound(low)}"
+    if high is not None and x > high if key != "poisson" else high is not None and x >= high:
+        op = "<" if key == "poisson" else "<="
+        why = (" (a steeper law stiffens so abruptly that the solver's steps shrink "
+               "without end)" if key == "alpha" else "")
+        return f"must be {op} {_bound(high)}{why}"
+    return None
+
+
+def _values(key: str, text: bool = False):
+    """The validator of a per-ball or per-contact key: a scalar (checked now, kept a
+    float or str), or a list or generator table (a ``generators.Values``)."""
+
+    def check(value: Any, info: ValidationInfo) -> Any:
+        if value is None or isinstance(value, Values):
+            return value
+        if isinstance(value, (Mapping, list, tuple)):
+            base = (info.context or {}).get("base_dir", ".")
+            try:
+                return generators.check(value, text=text, base_dir=base)
+            except ValuesError as exc:
+                raise _fail([_Issue(exc.reason, exc.sub)]) from None
+        if text:
+            name = _check_str(value)
+            if name not in MATERIALS:
+                raise _fail([_Issue(f"unknown material {_show(name)}"
+                                    f"{_suggest(name, list(MATERIALS))} (known: "
+                                    f"{', '.join(MATERIALS)})")])
+            return name
+        x = _check_float(value)
+        reason = _rule_reason(key, x)
+        if reason:
+            raise _fail([_Issue(f"{reason}, got {_show(value)}")])
+        return x
+
+    return BeforeValidator(check)
+
+
+def _dump_values(value: Any) -> Any:
+    return value.to_json() if isinstance(value, Values) else value
+
+
+_Dump = PlainSerializer(_dump_values)
+_PerItem = Annotated[Any, _Dump]
+
+
 class Chain(BaseModel):
-    """The line of balls: ``n`` balls, the first ``k`` moving at velocity 1, and the
-    contact exponent ``alpha`` (1 linear, 1.5 Hertz)."""
+    """The line of balls: ``n`` balls; their masses, contacts (stiffness, exponent
+    ``alpha``, gap), initial velocities (the first ``k`` at ``speed``, or ``velocity``
+    for each) and external forces; or, in SI, their diameters and materials.
+
+    Per-ball and per-contact keys hold a number, a list or a generator table
+    (``chainrun.generators``); a number is kept a float (a material a str), the others
+    a ``generators.Values``. Keys left out are None.
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     n: _Int = Field(ge=1)
-    k: _Int = Field(ge=1)
-    alpha: _Float = Field(ge=1)
+    velocity: Annotated[Any, _values("velocity"), _Dump] = None
+    k: _OptInt = Field(None, ge=1, validate_default=True)
+    speed: _OptFloat = None
+    material: Annotated[Any, _values("material", text=True), _Dump] = None
+    young: Annotated[Any, _values("young"), _Dump] = None
+    poisson: Annotated[Any, _values("poisson"), _Dump] = None
+    density: Annotated[Any, _values("density"), _Dump] = None
+    diameter: Annotated[Any, _values("diameter"), _Dump] = None
+    alpha: Annotated[Any, _values("alpha"), _Dump] = Field(None, validate_default=True)
+    mass: Annotated[Any, _values("mass"), _Dump] = None
+    stiffness: Annotated[Any, _values("stiffness"), _Dump] = None
+    gap: Annotated[Any, _values("gap"), _Dump] = None
+    force: Annotated[Any, _values("force"), _Dump] = None
+    precompression: _OptFloat = Field(None, ge=0)
 
     @field_validator("k")
     @classmethod
-    def _k_at_most_n(cls, k: int, info: ValidationInfo) -> int:
+    def _k_at_most_n(cls, k: int | None, info: ValidationInfo) -> int | None:
+        if k is None:
+            # required unless the velocities are given (absent from data: invalid)
+            if info.data.get("velocity", "invalid") is None:
+                raise _fail([_Issue("required")])
+            return k
         n = info.data.get("n")  # absent when n itself is invalid
         if n is not None and k > n:
             raise _fail([_Issue(f"must be <= chain.n ({n}), got {k}", involves=("n",))])
         return k
+
+    @field_validator("alpha")
+    @classmethod
+    def _alpha_unless_real(cls, alpha: Any, info: ValidationInfo) -> Any:
+        # required unless a material's Hertz law sets it (3/2)
+        real = ("material", "young", "poisson", "density")
+        if alpha is None and all(key in info.data and info.data[key] is None for key in real):
+            raise _fail([_Issue("required")])
+        return alpha
+
+    @field_validator("speed")
+    @classmethod
+    def _speed_not_zero(cls, speed: float | None) -> float | None:
+        if speed == 0.0:
+            raise _fail([_Issue("must not be 0 (the first k balls strike at this speed)")])
+        return speed
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "Chain":
+        issues: list[_Issue] = []
+        if self.velocity is not None:
+            for key in ("k", "speed"):
+                if getattr(self, key) is not None:
+                    issues.append(_Issue("give chain.velocity or chain.k, not both", (key,)))
+        if issues:
+            raise _fail(issues)
+        return self
+
+    @property
+    def is_paper(self) -> bool:
+        """Only n, k and a scalar alpha: the paper's line (built without arrays)."""
+        return (self.velocity is None and isinstance(self.alpha, float)
+                and all(getattr(self, key) is None for key in type(self).model_fields
+                        if key not in ("n", "k", "alpha")))
+
+
+class WallSettings(BaseModel):
+    """A flat wall at one end of the line: its contact with the end ball has a
+    stiffness, an exponent and a gap; or, in SI, the wall is of a ``material``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    stiffness: _OptFloat = Field(None, gt=0)
+    alpha: _OptFloat = Field(None, ge=1, le=MAX_ALPHA)
+    gap: _Float = 0.0
+    material: str | None = None
+
+    @field_validator("material", mode="before")
+    @classmethod
+    def _material(cls, value: Any) -> str | None:
+        if value is None:
+            return None
+        name = _check_str(value)
+        if name not in MATERIALS:
+            raise _fail([_Issue(f"unknown material {_show(name)}{_suggest(name, list(MATERIALS))}"
+                                f" (known: {', '.join(MATERIALS)})")])
+        return name
+
+    @model_validator(mode="after")
+    def _one_law(self) -> "WallSettings":
+        if self.material is not None:
+            given = [key for key in ("stiffness", "alpha") if getattr(self, key) is not None]
+            if given:
+                raise _fail([_Issue("the material's Hertz law sets it; give one or the other",
+                                    (key,)) for key in given])
+        return self
+
+
+class Walls(BaseModel):
+    """Optional walls at the left (before ball 1) and right (after ball N) ends."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    left: WallSettings | None = None
+    right: WallSettings | None = None
+
+    @field_validator("left", "right", mode="before")
+    @classmethod
+    def _empty_wall(cls, value: Any) -> Any:
+        return {} if value is None else value  # YAML ``right:`` with nothing under it
+
+
+# --- the line an experiment describes -----------------------------------------------------
+
+
+class LineError(Exception):
+    """Problems building a line, as ``key: reason`` problems."""
+
+    def __init__(self, problems: list["_Problem"]):
+        super().__init__("; ".join(p.line() for p in problems))
+        self.problems = problems
+
+
+def _expanded(chain: Chain, key: str, size: int, problems: list["_Problem"],
+              prefix: str = "chain") -> np.ndarray | None:
+    """The values of ``chain.<key>`` expanded to ``size`` and checked (None if absent
+    or wrong; the problem is added to ``problems``)."""
+    value = getattr(chain, key)
+    if value is None:
+        return None
+    values = value if isinstance(value, Values) else Values(scalar=value)
+    try:
+        a = generators.expand(values, size)
+    except ValuesError as exc:
+        problems.append(_Problem(".".join((prefix, key) + exc.sub), exc.reason))
+        return None
+    if key == "material":
+        unknown = [i for i, name in enumerate(a) if name not in MATERIALS]
+        if unknown:
+            i = unknown[0]
+            problems.append(_Problem(f"{prefix}.{key}[{i}]", f"unknown material "
+                                     f"{_show(a[i])} (known: {', '.join(MATERIALS)})"))
+            return None
+        return a
+    bad = ~np.isfinite(a)
+    low, strict, high, _ = _RULES[key]
+    with np.errstate(invalid="ignore"):
+        if low is not None:
+            bad |= (a <= low) if strict else (a < low)
+        if high is not None:
+            bad |= (a >= high) if key == "poisson" else (a > high)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        x = float(a[i])
+        reason = "must be finite" if not math.isfinite(x) else _rule_reason(key, x)
+        problems.append(_Problem(f"{prefix}.{key}[{i}]", f"{reason}, got {_show(x)}"))
+        return None
+    return a
+
+
+def _velocities(chain: Chain, problems: list["_Problem"]) -> np.ndarray | None:
+    if chain.velocity is not None:
+        return _expanded(chain, "velocity", chain.n, problems)
+    v = np.zeros(chain.n)
+    v[:chain.k] = 1.0 if chain.speed is None else chain.speed
+    return v
+
+
+def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
+    """The ``Line`` an experiment's chain and walls describe, in its ``units``.
+
+    In SI, balls given by ``diameter`` and a ``material`` (a preset of
+    ``chainrun.materials`` or ``young``, ``poisson`` and ``density``) get the mass
+    ``rho pi d^3 / 6`` and Hertz contacts (``physics.hertz_stiffness``, alpha = 3/2); a
+    wall of a ``material`` is a flat body of it (R* = R of the end ball), and a wall
+    with neither stiffness nor material is of the end ball's material. With
+    ``precompression`` the resting balls start at equilibrium under that load
+    (``chainrun.solver.model.precompress``).
+
+    Raises
+    ------
+    LineError
+        Every problem found, each naming its key (and index).
+    """
+    problems: list[_Problem] = []
+    n = chain.n
+    real = [key for key in _SI_KEYS if getattr(chain, key) is not None]
+    wall_real = [side for side in ("left", "right")
+                 if getattr(walls, side) is not None and getattr(walls, side).material]
+    if units != "si":
+        problems += [_Problem(f"chain.{key}", 'needs units = "si" (real spheres)')
+                     for key in real]
+        problems += [_Problem(f"walls.{side}.material", 'needs units = "si" (real spheres)')
+                     for side in wall_real]
+        if problems:
+            raise LineError(problems)
+    young = poisson = diameter = None
+    line_kw: dict[str, Any] = {}
+    if real:
+        explicit = [key for key in ("young", "poisson", "density") if getattr(chain, key) is not None]
+        if chain.material is not None and explicit:
+            problems += [_Problem(f"chain.{key}", "give chain.material or explicit constants, "
+                                  "not both") for key in explicit]
+        elif chain.material is None and len(explicit) < 3:
+            problems += [_Problem(f"chain.{key}", "required with explicit constants "
+                                  "(or give chain.material)")
+                         for key in ("young", "poisson", "density") if key not in explicit]
+        if chain.diameter is None:
+            problems.append(_Problem("chain.diameter", "required with a material (m)"))
+        for key in ("mass", "stiffness", "alpha"):
+            if getattr(chain, key) is not None:
+                problems.append(_Problem(f"chain.{key}", "set by the material and diameter "
+                                         "(Hertz, alpha = 3/2); give one or the other"))
+        if problems:
+            raise LineError(problems)
+        diameter = _expanded(chain, "diameter", n, problems)
+        if chain.material is not None:
+            names = _expanded(chain, "material", n, problems)
+            if names is not None:
+                young = np.array([MATERIALS[m].young for m in names])
+                poisson = np.array([MATERIALS[m].poisson for m in names])
+                density = np.array([MATERIALS[m].density for m in names])
+        else:
+            young = _expanded(chain, "young", n, problems)
+            poisson = _expanded(chain, "poisson", n, problems)
+            density = _expanded(chain, "density", n, problems)
+        if problems:
+            raise LineError(problems)
+        radius = diameter / 2.0
+        line_kw["mass"] = physics.sphere_mass(density, diameter)
+        line_kw["stiffness"] = physics.hertz_stiffness(young[:-1], poisson[:-1], radius[:-1],
+                                                       young[1:], poisson[1:], radius[1:])
+        line_kw["alpha"] = 1.5
+    else:
+        for key in ("mass", "stiffness", "alpha"):
+            size = n if _RULES[key][3] == "ball" else n - 1
+            a = _expanded(chain, key, size, problems)
+            if a is not None:
+                line_kw[key] = a
+    for key in ("gap",):
+        a = _expanded(chain, key, n - 1, problems)
+        if a is not None:
+            line_kw[key] = a
+    force = _expanded(chain, "force", n, problems)
+    if force is not None:
+        line_kw["force"] = force
+    velocity = _velocities(chain, problems)
+
+    built: dict[str, Wall] = {}
+    for side in ("left", "right"):
+        spec = getattr(walls, side)
+        if spec is None:
+            continue
+        end = 0 if side == "left" else n - 1
+        if spec.material is not None and young is None:
+            problems.append(_Problem(f"walls.{side}.material", "needs the balls' materials "
+                                     "(chain.material and chain.diameter)"))
+            continue
+        if spec.material is not None or (spec.stiffness is None and young is not None):
+            if spec.stiffness is None and spec.alpha is not None and spec.material is None:
+                problems.append(_Problem(f"walls.{side}.alpha", "a wall of the end ball's "
+                                         "material is Hertz (3/2); give its stiffness too"))
+                continue
+            wall = MATERIALS[spec.material] if spec.material else None
+            stiffness = float(physics.hertz_stiffness(
+                young[end], poisson[end], diameter[end] / 2.0,
+                wall.young if wall else young[end], wall.poisson if wall else poisson[end]))
+            built[side] = Wall(stiffness, 1.5, spec.gap)
+            continue
+        if spec.stiffness is None and units == "si":
+            problems.append(_Problem(f"walls.{side}.stiffness", "required in SI (N/m^alpha), "
+                                     "or give the wall a material"))
+            continue
+        alpha = spec.alpha
+        if alpha is None:  # the law of the contact next to it
+            a = line_kw.get("alpha", 1.5)
+            alpha = float(np.asarray(a).reshape(-1)[0 if side == "left" else -1]) if n > 1 \
+                else 1.5
+        built[side] = Wall(1.0 if spec.stiffness is None else spec.stiffness, alpha, spec.gap)
+    if problems:
+        raise LineError(problems)
+    try:
+        line = Line.make(n, velocity=velocity, left=built.get("left"),
+                         right=built.get("right"), **line_kw)
+    except ValueError as exc:  # not expected: every value was checked above
+        raise LineError([_Problem("chain", str(exc))]) from None
+    if chain.precompression:
+        if force is not None and np.any(force != 0.0):
+            raise LineError([_Problem("chain.precompression", "sets the external force "
+                                      "itself; leave chain.force out")])
+        try:
+            line = precompress(line, chain.precompression)
+        except ValueError as exc:
+            raise LineError([_Problem("chain.precompression", str(exc))]) from None
+    return line
+
+
+def _needs_t_end(chain: Chain, walls: "Walls", t_end: float | None) -> list["_Problem"]:
+    """The problem of a line with no terminal state run without a stop time, judged
+    from its keys (a generated force is judged when the line is built)."""
+    if t_end is not None:
+        return []
+    reasons = []
+    if chain.precompression:
+        reasons.append("chain.precompression keeps pushing")
+    elif isinstance(chain.force, float) and chain.force != 0.0:
+        reasons.append("chain.force keeps doing work")
+    elif isinstance(chain.force, Values) and chain.force.items is not None and any(
+            chain.force.items):
+        reasons.append("chain.force keeps doing work")
+    if walls.left is not None and walls.right is not None:
+        reasons.append("the line is held between two walls")
+    if not reasons:
+        return []
+    return [_Problem("solver.t_end", f"required: {' and '.join(reasons)}, so the run "
+                     "has no terminal state", frozenset({"chain.force",
+                                                         "chain.precompression"}))]
 
 
 def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Issue]]:
@@ -446,13 +903,15 @@ class SolverSettings(BaseModel):
 def _flatten_sweep(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
     """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``.
 
-    Only one level is unfolded (sweepable keys have two parts), so a deep or cyclic
-    table (YAML aliases) is reported as an unknown key rather than recursed into.
+    At most two levels are unfolded (sweepable keys have two or three parts, as
+    ``walls.right.gap``), so a deep or cyclic table (YAML aliases) is reported as an
+    unknown key rather than recursed into.
     """
     items: list[tuple[str, Any]] = []
     for key, value in table.items():
         dotted = f"{prefix}{_key_text(key)}"
-        if isinstance(value, Mapping) and not prefix and dotted not in SWEEPABLE_KEYS:
+        if (isinstance(value, Mapping) and prefix.count(".") < 2 and dotted not in SWEEPABLE_KEYS
+                and (not prefix or dotted == "walls.left" or dotted == "walls.right")):
             items.extend(_flatten_sweep(value, dotted + "."))
         else:
             items.append((dotted, value))
@@ -506,18 +965,31 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
     return valid, named, issues
 
 
+def _short(key: str) -> str:
+    """A swept key as a run id names it: ``k`` for ``chain.k``, ``right_gap`` for
+    ``walls.right.gap``."""
+    return "_".join(key.split(".")[1:]) if key.startswith("walls.") else key.split(".")[-1]
+
+
 def _label(overrides: Mapping[str, Any], sep: str = ", ") -> str:
-    """``"n=100, k=3"``: the last part of each swept key with its value."""
-    return sep.join(f"{key.split('.')[-1]}={value}" for key, value in overrides.items())
+    """``"n=100, k=3"``: the short name of each swept key with its value."""
+    return sep.join(f"{_short(key)}={value}" for key, value in overrides.items())
 
 
 def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
-    """Set ``data["chain"]["k"]`` for ``"chain.k"``, creating a missing table."""
-    table, key = dotted.split(".")
-    if data.get(table) is None:
-        data[table] = {}
-    if isinstance(data[table], Mapping):
-        data[table] = {**data[table], key: value}
+    """Set ``data["chain"]["k"]`` for ``"chain.k"`` (and ``data["walls"]["right"]["gap"]``
+    for ``"walls.right.gap"``), creating missing tables."""
+    head, _, rest = dotted.partition(".")
+    if data.get(head) is None:
+        data[head] = {}
+    if not isinstance(data[head], Mapping):
+        return
+    inner = dict(data[head])
+    if "." in rest:
+        _set_key(inner, rest, value)
+    else:
+        inner[rest] = value
+    data[head] = inner
 
 
 def _canonical_json(config: dict[str, Any], times_json: str) -> str:
@@ -546,7 +1018,9 @@ class Experiment(BaseModel):
 
     name: str
     description: str = ""
+    units: str = "paper"
     chain: Chain
+    walls: Walls = Walls()
     output: Output = Output()
     solver: SolverSettings = SolverSettings()
     sweep: dict[str, tuple[int | float, ...]] = Field(default_factory=dict)
@@ -578,7 +1052,16 @@ class Experiment(BaseModel):
     def _description(cls, value: Any) -> str:
         return "" if value is None else _check_str(value)
 
-    @field_validator("output", "solver", mode="before")
+    @field_validator("units", mode="before")
+    @classmethod
+    def _units(cls, value: Any) -> str:
+        value = _check_str(value)
+        if value not in UNITS:
+            raise _fail([_Issue(f"expected one of {', '.join(map(repr, UNITS))}, got "
+                                f"{_show(value)}{_suggest(value, list(UNITS))}")])
+        return value
+
+    @field_validator("output", "solver", "walls", mode="before")
     @classmethod
     def _empty_table(cls, value: Any) -> Any:
         return {} if value is None else value  # YAML ``output:`` with nothing under it
@@ -603,18 +1086,29 @@ class Experiment(BaseModel):
 
     def __hash__(self) -> int:
         sweep = tuple(self.sweep.items())
-        return hash((self.name, self.description, self.chain, self.output, self.solver, sweep))
+        return hash((self.name, self.description, self.units, self.chain, self.walls,
+                     self.output, self.solver, sweep))
 
     def _base_data(self) -> dict[str, Any]:
-        return {
+        """The run's settings before the sweep's values: the chain and walls as their
+        models' fields (not yet JSON), the rest as plain data. Keys that were left out
+        stay out, so that an experiment of the paper's keys hashes as it always did."""
+        data = {
             "name": self.name,
             "description": self.description,
-            "chain": self.chain.model_dump(),
+            "chain": _fields(self.chain),
             "output": {"times": list(self.output.times), **(
                 {"sensors": list(self.output.sensors), "sensor_dt": self.output.sensor_dt}
                 if self.output.sensors else {})},
             "solver": self.solver.model_dump(),
         }
+        if self.units != "paper":
+            data["units"] = self.units
+        walls = {side: _fields(getattr(self.walls, side)) for side in ("left", "right")
+                 if getattr(self.walls, side) is not None}
+        if walls:
+            data["walls"] = walls
+        return data
 
     def runs(self) -> list[RunSpec]:
         """Every run of the experiment: the cartesian product of the sweep.
@@ -646,27 +1140,39 @@ class Experiment(BaseModel):
                 chain = Chain.model_validate(data["chain"])
             except ValidationError as exc:
                 problems += _translate(exc, ("chain",))
+                chain = None
             else:
                 problems += _sensors_beyond_n(self.output.sensors, chain.n)
+            try:
+                walls = Walls.model_validate(data.get("walls") or {})
+            except ValidationError as exc:
+                problems += _translate(exc, ("walls",))
+                walls = None
             try:
                 solver = SolverSettings.model_validate(data["solver"])
             except ValidationError as exc:
                 problems += _translate(exc, ("solver",))
             else:
                 problems += _times_after_t_end(self.output.times, solver.t_end)
+                if chain is not None and walls is not None:
+                    problems += _needs_t_end(chain, walls, solver.t_end)
             if problems:
                 label = f"sweep ({_label(overrides)}): " if overrides else ""
                 lines = [_one_line(f"{label}{p.line()}") for p in problems]
                 raise ConfigError(self._source or self.name, lines)
-            config = {**data, "chain": chain.model_dump(), "solver": solver.model_dump()}
+            config = {**data, "chain": chain.model_dump(exclude_none=True),
+                      "solver": solver.model_dump()}
+            if walls.left is not None or walls.right is not None:
+                config["walls"] = walls.model_dump(exclude_none=True)
             canonical = _canonical_json(config, times_json)
+            k, alpha = _k_and_alpha(chain)
             specs.append(
                 RunSpec(
                     experiment=self.name,
                     run_id=_label(overrides, "_") or "run",
                     n=chain.n,
-                    k=chain.k,
-                    alpha=chain.alpha,
+                    k=k,
+                    alpha=alpha,
                     times=np.array(self.output.times, dtype=np.float64),
                     t_end=solver.t_end,
                     rtol=solver.rtol,
@@ -677,6 +1183,10 @@ class Experiment(BaseModel):
                     config=config,
                     config_hash=hashlib.sha256(canonical.encode()).hexdigest(),
                     source_text=self.source_text,
+                    units=self.units,
+                    chain=None if chain.is_paper and walls == Walls() and self.units == "paper"
+                    else chain,
+                    walls=walls,
                 )
             )
         return specs
@@ -685,9 +1195,48 @@ class Experiment(BaseModel):
 _MODEL_AT: dict[tuple[str, ...], type[BaseModel]] = {
     (): Experiment,
     ("chain",): Chain,
+    ("walls",): Walls,
+    ("walls", "left"): WallSettings,
+    ("walls", "right"): WallSettings,
     ("output",): Output,
     ("solver",): SolverSettings,
 }
+
+
+def _fields(model: BaseModel) -> dict[str, Any]:
+    """A model's fields that were given (not None), as they are (``Values`` kept)."""
+    return {key: value for key, value in model if value is not None}
+
+
+def _k_and_alpha(chain: Chain) -> tuple[int, float]:
+    """K, the leading balls that move, and the contacts' exponent if it is one number
+    (NaN if it varies): what summaries and the index show of a run."""
+    if chain.velocity is None:
+        k = chain.k
+    else:
+        v = chain.velocity
+        if isinstance(v, float):
+            k = chain.n if v != 0.0 else 0
+        else:
+            try:
+                a = (np.asarray(v.items, dtype=float) if v.items is not None
+                     else generators.expand(v, chain.n) if chain.n <= CHECK_MAX_N
+                     else np.zeros(1))
+            except ValuesError:
+                a = np.zeros(1)
+            moving = a != 0.0
+            k = len(a) if moving.all() else int(np.argmin(moving))
+    a = chain.alpha
+    if a is None:
+        alpha = 1.5  # Hertz, from the material
+    elif isinstance(a, float):
+        alpha = a
+    elif a.items is not None:
+        alpha = a.items[0] if len(set(a.items)) == 1 else math.nan
+    else:
+        table = json.loads(a.table)
+        alpha = table["value"] if set(table) == {"value"} else math.nan
+    return int(k), float(alpha)
 
 
 def _sensors_beyond_n(sensors: tuple[int, ...], n: int) -> list[_Problem]:
@@ -756,6 +1305,38 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
     return problems
 
 
+def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
+                   context: dict[str, Any]) -> list[_Problem]:
+    """Problems of the line one combination describes: values out of range (by
+    index), keys that conflict, a stop time it needs. Nothing when its tables are
+    themselves wrong (reported with them)."""
+    chain, walls = merged.get("chain"), merged.get("walls")
+    units = merged.get("units", "paper")
+    if not isinstance(chain, Mapping) or not (walls is None or isinstance(walls, Mapping)) \
+            or units not in UNITS:
+        return []
+    solver = merged.get("solver")
+    try:
+        c = Chain.model_validate(chain, context=context)
+        w = Walls.model_validate(walls or {}, context=context)
+        t_end = SolverSettings.model_validate(solver if isinstance(solver, Mapping)
+                                              else {}).t_end
+    except (ValidationError, TypeError):
+        return []
+    problems = _needs_t_end(c, w, t_end)
+    if not (c.is_paper and w == Walls() and units == "paper") and c.n <= CHECK_MAX_N:
+        try:
+            line = build_line(c, w, units)
+        except LineError as exc:
+            problems += exc.problems
+        else:
+            if not problems and t_end is None and not line.has_terminal_state:
+                problems.append(_Problem("solver.t_end", "required: chain.force keeps doing "
+                                         "work, so the run has no terminal state"))
+    involves = frozenset(k for k in overrides if k.startswith(("chain.", "walls.")))
+    return [p._replace(involves=p.involves | involves) for p in problems]
+
+
 def _validate(data: Any, source: str) -> Experiment:
     """The experiment in ``data`` (parsed file contents), every problem reported at once.
 
@@ -765,6 +1346,8 @@ def _validate(data: Any, source: str) -> Experiment:
     if not isinstance(data, Mapping):
         got = "an empty file" if data is None else f"{type(data).__name__} {_show(data)}"
         raise ConfigError(source, [f"top level: expected a table of keys, got {got}"])
+    # data files named by the experiment are relative to its folder
+    context = {"base_dir": os.path.dirname(os.path.abspath(source))}
     valid, named, sweep_issues = _check_sweep(data.get("sweep"))
     base = {key: value for key, value in data.items() if key != "sweep"}
     keys = list(valid)
@@ -810,17 +1393,22 @@ def _validate(data: Any, source: str) -> Experiment:
         if first is None:  # the whole file once ...
             first = merged
             try:
-                Experiment.model_validate(merged)
+                Experiment.model_validate(merged, context=context)
             except ValidationError as exc:
                 problems = _translate(exc)
+            if not problems:
+                problems = _line_problems(merged, overrides, context)
         else:  # ... then only the tables the sweep changes
             for table in dict.fromkeys(key.split(".")[0] for key in overrides):
                 model = _MODEL_AT[(table,)]
                 if isinstance(merged[table], Mapping):
                     try:
-                        model.model_validate(merged[table])
+                        model.model_validate(merged[table], context=context)
                     except ValidationError as exc:
                         problems += _translate(exc, (table,))
+            if not problems and any(k.startswith(("chain.", "walls.", "solver.t_end"))
+                                    for k in overrides):
+                problems = _line_problems(merged, overrides, context)
         solver = merged.get("solver")
         if output is not None and (solver is None or isinstance(solver, Mapping)):
             try:
@@ -832,7 +1420,7 @@ def _validate(data: Any, source: str) -> Experiment:
         chain = merged.get("chain")
         if output is not None and output.sensors and isinstance(chain, Mapping):
             try:
-                n = Chain.model_validate(chain).n
+                n = Chain.model_validate(chain, context=context).n
             except ValidationError:
                 pass  # reported above
             else:
@@ -857,7 +1445,7 @@ def _validate(data: Any, source: str) -> Experiment:
     if lines:
         raise ConfigError(source, [_one_line(line) for line in lines])
     assert first is not None
-    return Experiment.model_validate({**first, "sweep": data.get("sweep")})
+    return Experiment.model_validate({**first, "sweep": data.get("sweep")}, context=context)
 
 
 # --- reading files ------------------------------------------------------------------------

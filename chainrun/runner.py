@@ -181,17 +181,18 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     write to (the same path on every machine of a cluster).
     """
     from chainrun.limits import check_memory
-    from chainrun.solver import load_kernels, simulate, velocity_floor
+    from chainrun.solver import load_kernels, simulate_line, velocity_floor
     from chainrun.store import RunWriter
 
     check_memory(spec.n, len(spec.times))
+    line = spec.line  # built here, on the worker: as long as the line (ConfigError if wrong)
     # numba loads the kernels on their first call; the run's wall time is its solve's
     load_kernels()
     path = run_file(Path(outdir), spec)
     hook = None if on_progress is None else (lambda t: on_progress(spec.run_id, t))
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
-        sol = simulate(
-            spec.n, spec.k, spec.alpha, spec.times, t_end=spec.t_end, rtol=spec.rtol,
+        sol = simulate_line(
+            line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
             max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
             sensors=spec.sensors, sensor_dt=spec.sensor_dt,
         )

@@ -94,6 +94,17 @@ _LIBVER = "v108"
 #: The names of the observables written at each snapshot.
 OBSERVABLES = ("kinetic_energy", "potential_energy", "momentum")
 
+#: H5MD ``unit`` of each quantity, by the units of the run. The paper's units are
+#: written "1": every coefficient of its equation is 1 (docs/schema.md gives their
+#: meaning in kg, m and s).
+UNITS: dict[str, dict[str, str]] = {
+    "si": {"time": "s", "position": "m", "velocity": "m/s", "mass": "kg", "force": "N",
+           "energy": "J", "momentum": "kg m/s", "stiffness": "N m-alpha", "alpha": "1",
+           "gap": "m"},
+    "paper": dict.fromkeys(("time", "position", "velocity", "mass", "force", "energy",
+                            "momentum", "stiffness", "alpha", "gap"), "1"),
+}
+
 #: Columns every index entry must have, in table order, with their dtype.
 INDEX_COLUMNS: dict[str, str] = {
     "run_id": "str",
@@ -469,6 +480,9 @@ class RunWriter:
         self._spec = spec
         self._n = int(spec.n)
         self._alpha = float(spec.alpha)
+        self._units = getattr(spec, "units", "paper")
+        # the paper's line (chain None) keeps its observables' formulas, bit for bit
+        self._line = None if getattr(spec, "chain", None) is None else spec.line
         self._pending_bytes = 0
         self._done = False
         self._h5: h5py.File | None = _create(self.path, self.temp_path, "run file")
@@ -521,13 +535,61 @@ class RunWriter:
         self._velocity = _Element(chain, "velocity", (n, 1), [ball, spatial], hint,
                                   "velocity dx_n/dt")
         obs = _group(h5, "observables")
+        general = self._line is not None
         self._observables = {
             "kinetic_energy": _Element(obs, "kinetic_energy", (), [], hint,
-                                       "sum v^2/2"),
-            "potential_energy": _Element(obs, "potential_energy", (), [], hint,
-                                         "sum c_+^(alpha+1)/(alpha+1), c_j = x_j - x_j+1"),
-            "momentum": _Element(obs, "momentum", (), [], hint, "sum v"),
+                                       "sum m v^2/2" if general else "sum v^2/2"),
+            "potential_energy": _Element(
+                obs, "potential_energy", (), [], hint,
+                "sum kappa delta_+^(alpha+1)/(alpha+1) over contacts and walls, less sum f x"
+                if general else "sum c_+^(alpha+1)/(alpha+1), c_j = x_j - x_j+1"),
+            "momentum": _Element(obs, "momentum", (), [], hint,
+                                 "sum m v" if general else "sum v"),
         }
+        units = UNITS[self._units]
+        for element, unit in ((self._position, "position"), (self._velocity, "velocity"),
+                              (self._observables["kinetic_energy"], "energy"),
+                              (self._observables["potential_energy"], "energy"),
+                              (self._observables["momentum"], "momentum")):
+            element.value.attrs["unit"] = units[unit]
+            element.time.attrs["unit"] = units["time"]
+        self._write_model(h5)
+
+    def _write_model(self, h5: h5py.File) -> None:
+        """``/model``: the line as solved, per ball and per contact, its walls, its
+        units and the scales it was solved in."""
+        from chainrun.solver import Line
+
+        spec, units = self._spec, UNITS[self._units]
+        line = self._line if self._line is not None else Line.paper(spec.n, spec.k, spec.alpha)
+        model = _group(h5, "model")
+        model.attrs["units"] = self._units
+        ball = _scale(model, "ball", np.arange(1, line.n + 1, dtype=np.int64),
+                      "ball number n = 1..N")
+        contact = _scale(model, "contact", np.arange(1, line.n, dtype=np.int64),
+                         "contact j = 1..N-1 joins balls j and j+1")
+        for name, scale, unit, long_name in (
+            ("mass", ball, "mass", "mass of each ball"),
+            ("velocity", ball, "velocity", "initial velocity"),
+            ("position", ball, "position", "initial displacement (from touching, no gap)"),
+            ("force", ball, "force", "constant external force on each ball (+x: to ball N)"),
+            ("stiffness", contact, "stiffness", "kappa of F = kappa delta_+^alpha"),
+            ("alpha", contact, "alpha", "exponent of the contact's force law"),
+            ("gap", contact, "gap", "gap g_j: delta_j = x_j - x_j+1 - g_j (< 0: overlap)"),
+        ):
+            ds = _array(model, name, getattr(line, name), [scale], long_name)
+            ds.attrs["unit"] = units[unit]
+        walls = _group(model, "walls")
+        for side, wall in (("left", line.left), ("right", line.right)):
+            if wall is not None:
+                g = _group(walls, side)
+                g.attrs["stiffness"] = np.float64(wall.stiffness)
+                g.attrs["alpha"] = np.float64(wall.alpha)
+                g.attrs["gap"] = np.float64(wall.gap)
+        scales = _group(model, "scales")
+        sc = line.scales()
+        for name in ("mass", "length", "time", "velocity", "force"):
+            scales.attrs[name] = np.float64(getattr(sc, name))
 
     # -- writing -----------------------------------------------------------------
 
@@ -554,11 +616,19 @@ class RunWriter:
             raise ValueError(
                 f"snapshot arrays must have shape ({self._n},); got {x.shape} and {v.shape}"
             )
-        values = {
-            "kinetic_energy": physics.kinetic_energy(v),
-            "potential_energy": physics.potential_energy(x, self._alpha),
-            "momentum": physics.momentum(v),
-        }
+        if self._line is None:
+            values = {
+                "kinetic_energy": physics.kinetic_energy(v),
+                "potential_energy": physics.potential_energy(x, self._alpha),
+                "momentum": physics.momentum(v),
+            }
+        else:
+            line = self._line
+            values = {
+                "kinetic_energy": physics.line_kinetic_energy(v, line.mass),
+                "potential_energy": physics.line_potential_energy(x, line),
+                "momentum": physics.line_momentum(v, line.mass),
+            }
         for name, element in self._observables.items():
             element.append(index, t, values[name])
         self._pending_bytes += x.nbytes + v.nbytes
@@ -605,7 +675,8 @@ class RunWriter:
             data = np.asarray(getattr(sol, name), dtype=np.float64)
             if data.shape != (n,):
                 raise StoreError(f"{self.path}: {name} has shape {data.shape}, expected ({n},)")
-            _array(results, name, data, [ball], long_name)
+            ds = _array(results, name, data, [ball], long_name)
+            ds.attrs["unit"] = UNITS[self._units][name.split("_")[1]]
         results.attrs["end_time"] = np.float64(sol.end_time)
         results.attrs["terminal"] = np.bool_(sol.terminal)
         results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
@@ -620,7 +691,8 @@ class RunWriter:
                              f"({len(t)}, {len(contact)}, {len(kind)})")
         event = _scale(events, "event", np.arange(len(t), dtype=np.int64),
                        "event number, in time order")
-        _array(events, "time", t, [event], "time of the event")
+        _array(events, "time", t, [event], "time of the event").attrs["unit"] = \
+            UNITS[self._units]["time"]
         c = _array(events, "contact", contact, [event],
                    "contact j (0-based) joins balls j+1 and j+2 (ball numbers 1..N)")
         c.attrs["base"] = np.int64(0)
@@ -769,6 +841,13 @@ class RunData:
     terminal : bool
     diagnostics : dict
         The fields of ``chainrun.solver.Diagnostics``.
+    model : dict or None
+        The line as solved (``/model``): ``units``; per ball ``mass``, ``velocity``,
+        ``position``, ``force`` (shape (N,)); per contact ``stiffness``, ``alpha``,
+        ``gap`` (shape (N-1,)); ``walls`` ({"left"/"right": {"stiffness", "alpha",
+        "gap"}}, the walls present) and ``scales`` (mass, length, time, velocity,
+        force: the paper's units of this line, in its units). None for files written
+        before the model was recorded: those hold the paper's line.
     sensor_balls : ndarray of int64, shape (S,)
         Force sensor balls (1..N); empty without sensors.
     sensor_time : ndarray, shape (M,)
@@ -802,10 +881,16 @@ class RunData:
         default_factory=lambda: np.zeros(0, np.int64))
     sensor_time: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     sensor_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0, 2)))
+    model: dict[str, Any] | None = None
 
     @property
     def n(self) -> int:
         return self.parameters["n"]
+
+    @property
+    def units(self) -> str:
+        """"paper" or "si": the units of every quantity in the file."""
+        return self.model["units"] if self.model else "paper"
 
     def contact_forces(self, stride: int = 1) -> np.ndarray:
         """Contact forces ``c_+^alpha`` at the snapshots, from the stored positions, of
@@ -908,8 +993,25 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         end_time=float(_attr(res, "end_time")),
         terminal=bool(_attr(res, "terminal")),
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
+        model=_read_model(h5),
         **_read_sensors(h5),
     )
+
+
+def _read_model(h5: h5py.File) -> dict[str, Any] | None:
+    """The ``/model`` group as a dict (None in files written before it existed)."""
+    if "model" not in h5:
+        return None
+    group = h5["model"]
+    model: dict[str, Any] = {"units": _as_str(_attr(group, "units"))}
+    for name in ("mass", "velocity", "position", "force", "stiffness", "alpha", "gap"):
+        model[name] = _get(group, name)[()]
+    walls = _get(group, "walls")
+    model["walls"] = {side: {key: float(walls[side].attrs[key])
+                             for key in ("stiffness", "alpha", "gap")}
+                      for side in ("left", "right") if side in walls}
+    model["scales"] = {key: float(value) for key, value in _get(group, "scales").attrs.items()}
+    return model
 
 
 def _read_sensors(h5: h5py.File) -> dict:

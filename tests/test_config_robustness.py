@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 from chainrun.config import (
     MAX_RUNS,
     MAX_SNAPSHOTS,
+    MAX_ALPHA,
     SWEEPABLE_KEYS,
     Chain,
     Experiment,
@@ -254,6 +255,10 @@ SWEEP_VALUES = {
     "chain.n": st.integers(1, 2**63 - 1),
     "chain.k": st.integers(1, 2**63 - 1),
     "chain.alpha": st.floats(1, 1.7976931348623157e308) | st.sampled_from([1, 1 + 2**-52, 1e300]),
+    **{key: st.floats(-1e308, 1e308) | st.sampled_from([5e-324, 1e300, 0.0])
+       for key in SWEEPABLE_KEYS if key.split(".")[-1] in (
+           "mass", "stiffness", "gap", "force", "speed", "precompression", "diameter", "alpha")
+       and key != "chain.alpha"},
     "solver.rtol": st.floats(1e-15, 1e-3) | st.sampled_from([1e-15, 1.0000000000000002e-15]),
     "solver.t_end": st.floats(5e-324, 1.7976931348623157e308) | st.sampled_from([5e-324, 1e-300]),
     "solver.max_events": st.integers(1, 2**63 - 1),
@@ -308,12 +313,12 @@ def test_negative_or_non_finite_swept_values_are_refused(key, value):
 
 def test_extreme_swept_values_give_short_ids():
     data = {"name": "x", "chain": {"n": 2**63 - 1, "k": 1, "alpha": 1.5}, "sweep": {
-        "chain.n": [2**63 - 1], "chain.k": [2**63 - 1], "chain.alpha": [1.7976931348623157e308],
+        "chain.n": [2**63 - 1], "chain.k": [2**63 - 1], "chain.alpha": [MAX_ALPHA],
         "solver.rtol": [1.0000000000000002e-15], "solver.t_end": [5e-324],
         "solver.max_events": [2**63 - 1]}}
     (spec,) = Experiment.model_validate(data).runs()
     assert spec.run_id == (
-        "n=9223372036854775807_k=9223372036854775807_alpha=1.7976931348623157e+308_"
+        "n=9223372036854775807_k=9223372036854775807_alpha=10.0_"
         f"rtol={1.0000000000000002e-15!r}_t_end=5e-324_max_events=9223372036854775807")
     assert np.asarray(spec.times).size == 0
 

@@ -15,7 +15,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: rank of each part: a part imports only parts of lower rank (or itself)
 RANK = {
     "chainrun.errors": 0, "chainrun.atomic": 0, "chainrun._gc": 0,
-    "chainrun.solver": 1,
+    "chainrun.materials": 0,  # data only
+    "chainrun.solver": 1, "chainrun.generators": 1,
     "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
     "chainrun.store": 3,
     "chainrun.runner": 4, "chainrun.analysis": 4,
@@ -28,6 +29,8 @@ RANK = {
 FORBIDDEN = {
     "chainrun.solver": {"h5py", "click", "matplotlib", "pydantic", "yaml", "dask"},
     "chainrun.config": {"h5py", "click", "matplotlib"},
+    "chainrun.generators": {"h5py", "click", "matplotlib", "pydantic", "yaml"},
+    "chainrun.materials": {"numpy", "h5py", "click", "matplotlib", "pydantic"},
     "chainrun.analysis": {"click", "matplotlib", "h5py"},
     "chainrun.plotting": {"click", "h5py", "scipy"},
     "chainrun.runner": {"click", "matplotlib"},

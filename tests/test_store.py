@@ -275,7 +275,7 @@ def test_xarray_sees_named_dimensions(run):
             assert tree["events"][name].dims == ("event",)
         assert tree.attrs["format"] == "chainrun-run"
         assert tree["parameters"].attrs["n"] == spec.n
-        named = {"time", "ball", "spatial", "event"}
+        named = {"time", "ball", "spatial", "event", "contact"}
         for node in tree.subtree:
             for var in node.ds.variables.values():
                 assert set(var.dims) <= named, (node.path, var.dims)

@@ -70,6 +70,44 @@ class RunSummary:
     first_time: float
     last_time: float
     file_bytes: int
+    model: str = ""  # the general line in brief ("" for the paper's line)
+
+
+def _span(a: np.ndarray, unit: str) -> str:
+    """``"1"``, or ``"0.5 ... 2 kg"`` for values that differ."""
+    unit = f" {unit}" if unit and unit != "1" else ""
+    if a.size == 0:
+        return "none"
+    lo, hi = float(np.min(a)), float(np.max(a))
+    return f"{lo:.4g}{unit}" if lo == hi else f"{lo:.4g} ... {hi:.4g}{unit}"
+
+
+def describe_model(model: dict | None) -> str:
+    """A line for a person: the masses, contacts, walls, forces and units of a run's
+    line (``RunData.model``); "" for the paper's line, which N, K and alpha say whole."""
+    if not model:
+        return ""
+    si = model["units"] == "si"
+    mass, stiffness, alpha = model["mass"], model["stiffness"], model["alpha"]
+    paper = (not si and np.all(mass == 1.0) and np.all(stiffness == 1.0)
+             and not np.any(model["gap"]) and not np.any(model["force"])
+             and not model["walls"] and np.all(np.isin(model["velocity"], (0.0, 1.0)))
+             and np.all(alpha == alpha[:1]))
+    if paper:
+        return ""
+    parts = [f"masses {_span(mass, 'kg' if si else '')}",
+             f"stiffness {_span(stiffness, 'N/m^alpha' if si else '')}",
+             f"alpha {_span(alpha, '')}"]
+    if np.any(model["gap"]):
+        parts.append(f"gaps {_span(model['gap'], 'm' if si else '')}")
+    if np.any(model["force"]):
+        parts.append(f"forces on {int(np.count_nonzero(model['force']))} balls")
+    walls = [f"{side} (stiffness {w['stiffness']:.4g}, alpha {w['alpha']:g}, gap {w['gap']:g})"
+             for side, w in model["walls"].items()]
+    parts.append("walls: " + (", ".join(walls) if walls else "none"))
+    v = model["velocity"]
+    parts.append(f"initial speeds {_span(v[v != 0], 'm/s' if si else '')}")
+    return "; ".join(parts) + ("; SI units" if si else "; paper units")
 
 
 def summarize(run) -> RunSummary:
@@ -117,4 +155,5 @@ def summarize(run) -> RunSummary:
         first_time=float(run.times[0]) if run.times.size else float("nan"),
         last_time=float(run.times[-1]) if run.times.size else float("nan"),
         file_bytes=os.path.getsize(run.path),
+        model=describe_model(getattr(run, "model", None)),
     )

@@ -33,8 +33,10 @@ def render(s) -> str:
               f"{s.first_time:.6g} ... {s.last_time:.6g}" if s.snapshots else "no snapshots")
     lines = [
         f"{s.path}  ({human_size(s.file_bytes)}, chainrun {s.creator_version}, {s.created})",
-        f"model     N = {s.n} balls, the first K = {s.k} striking at velocity 1; "
-        f"{law_name(s.alpha)} contacts (alpha = {s.alpha:g}); paper units",
+        (f"model     N = {s.n} balls, the first K = {s.k} striking" if s.model else
+         f"model     N = {s.n} balls, the first K = {s.k} striking at velocity 1; "
+         f"{law_name(s.alpha)} contacts (alpha = {s.alpha:g}); paper units"),
+        *([f"line      {s.model}"] if s.model else []),
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "
         f"at most {s.max_window} balls integrated at once, {s.wall_time:.2f} s",
@@ -44,9 +46,10 @@ def render(s) -> str:
         f"{s.slowest[0]} at {s.slowest[1]:.6g}",
         f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 0.01), "
         f"{s.left_behind} left behind",
-        f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
-        f"{share['ejected']:.2%}, left behind {share['left behind']:.2%}, in contacts "
-        f"{share['contacts']:.2%}",
+        *([] if s.model else [  # shares of K/2: the paper's line only
+            f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
+            f"{share['ejected']:.2%}, left behind {share['left behind']:.2%}, in contacts "
+            f"{share['contacts']:.2%}"]),
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
     ]

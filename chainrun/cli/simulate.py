@@ -51,6 +51,19 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
       [sweep]        # optional: every combination is a run
       "chain.k" = [1, 2, 3, 4]
 
+    Any line: [chain] mass, force, velocity (per ball), stiffness, alpha, gap (per
+    contact) each take a number, a list, or a generator table: {pattern = [1, 0.5]},
+    {taper = 0.9, start = 1}, {random = "uniform", low = 0.5, high = 2, seed = 1}
+    (or "lognormal" with median, sigma), {value = 1, impurity = {at = 20, value =
+    0.1}} (at counts from 1), {file = "m.npy"} (or .csv, beside CONFIG). chain.k
+    and chain.speed set the first k balls moving; chain.precompression = F0 holds
+    the resting balls against a right wall. [walls.left] and [walls.right] take
+    stiffness, alpha, gap. units = "si" adds per-ball diameter (m) and material
+    (steel, stainless_steel, chrome_steel, brass, aluminium, glass, ptfe,
+    tungsten_carbide; or young, poisson, density): masses and Hertz contacts follow,
+    and a wall may have a material. A line with a constant force or two walls needs
+    solver.t_end. docs/guide.md has every key.
+
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
     rtol (accuracy, default 1e-12), max_events. Optional [output] keys besides
     times: sensors (ball numbers) and sensor_dt, to sample the contact forces on
@@ -64,6 +77,7 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     \b
     Examples:
       chainrun simulate configs/table1.toml
+      chainrun simulate configs/examples/newtons-cradle.toml
       chainrun simulate sweep.toml --jobs 4
       chainrun simulate sweep.toml --force          # the config changed
       chainrun simulate sweep.toml --scheduler tcp://10.0.0.5:8786

@@ -235,3 +235,60 @@ class Line:
             speed = math.sqrt(length * f / mass)
         time = (mass * speed ** (1.0 - a0) / k0) ** (1.0 / (a0 + 1.0))
         return Scales(mass, speed * time, time)
+
+
+def strikers(line: Line) -> int:
+    """K: the number of leading balls with a non-zero initial velocity (they strike)."""
+    moving = line.velocity != 0.0
+    return line.n if moving.all() else int(np.argmin(moving))
+
+
+def precompress(line: Line, load: float) -> Line:
+    """``line`` with its resting balls held against the right wall by the force ``load``.
+
+    The strikers (balls 1..K, ``strikers``) keep their velocities; balls K+1..N start at
+    the static equilibrium under a constant external force ``load`` on ball K+1,
+    pointing at the right wall (+x), which keeps acting during the run. Every contact
+    from K+1 to the wall then carries ``load``, so the force law gives the positions
+    exactly, from the wall back:
+
+        x_N = g_R + (F0/k_R)^(1/a_R),   x_j = x_{j+1} + g_j + (F0/k_j)^(1/a_j)
+
+    for j = N-1 down to K+1. The strikers are moved by x_{K+1}, so that they meet ball
+    K+1 as they would without the load. The line must have a right wall, no external
+    force of its own, a ball after the strikers, and those balls at rest; ``load`` > 0.
+    The result has a force that keeps doing work: it has no terminal state.
+
+    Returns
+    -------
+    Line
+        A new line, with ``position`` and ``force`` set.
+    """
+    load = float(load)
+    if not (math.isfinite(load) and load > 0.0):
+        raise ValueError(f"the load must be a finite number > 0, got {load!r}")
+    if line.right is None:
+        raise ValueError("precompression needs a right wall to push against")
+    if np.any(line.force != 0.0):
+        raise ValueError("precompression sets the external forces; the line has its own")
+    k = strikers(line)
+    if k >= line.n:
+        raise ValueError("precompression needs a ball at rest after the strikers")
+    moving = np.flatnonzero(line.velocity[k:])
+    if moving.size:
+        raise ValueError(f"precompression needs the balls after the strikers at rest; "
+                         f"ball {k + int(moving[0]) + 1} moves")
+    wall = line.right
+    x = np.zeros(line.n)
+    x[-1] = wall.gap + (load / wall.stiffness) ** (1.0 / wall.alpha)
+    # contact j joins balls j and j+1 (0-based): x_j = x_{j+1} + its gap and compression,
+    # summed from the wall back (the order of a loop from j = N-2 down to K)
+    step = line.gap[k:] + (load / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
+    x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    x[:k] = line.position[:k] + x[k]
+    force = np.zeros(line.n)
+    force[k] = load
+    return Line(mass=line.mass.copy(), stiffness=line.stiffness.copy(),
+                alpha=line.alpha.copy(), gap=line.gap.copy(),
+                velocity=line.velocity.copy(), force=force, position=x,
+                left=line.left, right=line.right)

@@ -55,3 +55,71 @@ def potential_energy(x: np.ndarray, alpha: float) -> np.ndarray:
         np.power(c, alpha + 1.0, out=e, where=c > 0.0)
         total += e.sum(axis=-1)
     return total[()] / (alpha + 1.0)
+
+
+# --- contact laws of real spheres (SI) -------------------------------------------------------
+
+
+def sphere_mass(density, diameter) -> np.ndarray:
+    """Mass of a solid sphere, ``rho pi d^3 / 6``; any shape (broadcast)."""
+    d = np.asarray(diameter, dtype=float)
+    return np.asarray(density, dtype=float) * np.pi * d * d * d / 6.0
+
+
+def hertz_stiffness(young1, poisson1, radius1, young2, poisson2, radius2=np.inf) -> np.ndarray:
+    """Hertz constant ``kappa`` of two elastic spheres in contact, ``F = kappa delta^(3/2)``.
+
+    ``kappa = (4/3) E* sqrt(R*)`` with ``1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2`` and
+    ``R* = R1 R2 / (R1 + R2)``; a flat wall is a sphere of infinite radius
+    (``radius2 = inf``, the default), for which ``R* = R1``. For two identical spheres
+    of diameter d this is ``E d^(1/2) / (3 (1 - nu^2))``. Arguments broadcast.
+
+    References
+    ----------
+    .. [1] K. L. Johnson, *Contact Mechanics*, Cambridge University Press (1985),
+       section 4.2, eqs. (4.22)-(4.23).
+    """
+    e1, nu1, r1 = (np.asarray(a, dtype=float) for a in (young1, poisson1, radius1))
+    e2, nu2, r2 = (np.asarray(a, dtype=float) for a in (young2, poisson2, radius2))
+    e_star = 1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2)
+    r_star = np.where(np.isinf(r2), r1, r1 * r2 / (r1 + np.where(np.isinf(r2), 0.0, r2)))
+    return 4.0 / 3.0 * e_star * np.sqrt(r_star)
+
+
+# --- the general line (``chainrun.solver.model.Line``), in its own units --------------------
+
+
+def line_kinetic_energy(v: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """``sum m v^2 / 2``; v of shape (..., N)."""
+    v = np.asarray(v, dtype=float)
+    return 0.5 * np.einsum("...i,i,...i->...", v, np.asarray(mass, dtype=float), v)
+
+
+def line_momentum(v: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """``sum m v``; v of shape (..., N)."""
+    return np.asarray(v, dtype=float) @ np.asarray(mass, dtype=float)
+
+
+def _law_energy(delta: np.ndarray, kappa, alpha) -> np.ndarray:
+    e = np.zeros(np.broadcast_shapes(np.shape(delta), np.shape(kappa)))
+    with np.errstate(invalid="ignore"):
+        np.power(np.clip(delta, 0.0, None), np.asarray(alpha, dtype=float) + 1.0, out=e,
+                 where=np.asarray(delta) > 0.0)
+    return np.asarray(kappa, dtype=float) * e / (np.asarray(alpha, dtype=float) + 1.0)
+
+
+def line_potential_energy(x: np.ndarray, line) -> np.ndarray:
+    """Energy stored in the contacts (walls included), ``kappa delta_+^(alpha+1) /
+    (alpha+1)`` with ``delta_j = x_j - x_{j+1} - g_j``, less the work ``sum f x`` of the
+    constant external forces: so that kinetic plus potential energy is conserved.
+    x of shape (..., N)."""
+    x = np.asarray(x, dtype=float)
+    total = _law_energy(x[..., :-1] - x[..., 1:] - line.gap, line.stiffness,
+                        line.alpha).sum(axis=-1)
+    if line.left is not None:
+        w = line.left
+        total = total + _law_energy(-x[..., 0] - w.gap, w.stiffness, w.alpha)
+    if line.right is not None:
+        w = line.right
+        total = total + _law_energy(x[..., -1] - w.gap, w.stiffness, w.alpha)
+    return total - x @ line.force

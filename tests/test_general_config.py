@@ -1,0 +1,347 @@
+"""Experiment files of the general line: generators, checks by key and index, SI units and
+materials, walls, precompression, sweeps of the new keys, and what the run file records."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from chainrun import generators, store
+from chainrun.cli import main
+from chainrun.config import Walls, build_line, load_experiment, parse_experiment
+from chainrun.errors import ConfigError
+from chainrun.materials import MATERIALS
+from chainrun.solver import Diagnostics, Outcome, Solution, physics
+from chainrun.solver.model import Line, Wall, precompress, strikers
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "configs" / "examples"
+HEAD = 'name = "x"\n'
+
+
+def problems(text: str) -> list[str]:
+    with pytest.raises(ConfigError) as info:
+        parse_experiment(text, "toml")
+    return info.value.problems
+
+
+def line_of(text: str, source: str = "<string>") -> Line:
+    (spec,) = parse_experiment(text, "toml", source).runs()
+    return spec.line
+
+
+# --- generators --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("value, expected", [
+    (2.0, [2, 2, 2, 2, 2]),
+    ([1, 2, 3, 4, 5], [1, 2, 3, 4, 5]),
+    ({"pattern": [1.0, 0.5]}, [1, 0.5, 1, 0.5, 1]),
+    ({"taper": 0.5, "start": 8.0}, [8, 4, 2, 1, 0.5]),
+    ({"value": 1.0, "impurity": {"at": 2, "value": 0.1}}, [1, 0.1, 1, 1, 1]),
+    ({"value": 1.0, "impurity": {"at": [1, 5], "value": 3}}, [3, 1, 1, 1, 3]),
+    ({"pattern": [1, 2], "impurity": [{"at": 1, "value": 9}, {"at": 4, "value": 7}]},
+     [9, 2, 1, 7, 1]),
+])
+def test_generators_expand(value, expected):
+    np.testing.assert_array_equal(generators.expand(generators.check(value), 5), expected)
+
+
+def test_random_values_are_reproducible_and_in_range():
+    spec = generators.check({"random": "uniform", "low": 0.5, "high": 2.0, "seed": 1})
+    a, b = generators.expand(spec, 1000), generators.expand(spec, 1000)
+    np.testing.assert_array_equal(a, b)
+    assert a.min() >= 0.5 and a.max() < 2.0
+    other = generators.expand(generators.check(
+        {"random": "uniform", "low": 0.5, "high": 2.0, "seed": 2}), 1000)
+    assert not np.array_equal(a, other)
+    log = generators.expand(generators.check(
+        {"random": "lognormal", "median": 2.0, "sigma": 0.1, "seed": 3}), 4001)
+    assert np.all(log > 0) and abs(np.median(log) / 2.0 - 1) < 0.02
+
+
+def test_values_from_files_relative_to_the_config(tmp_path):
+    np.save(tmp_path / "m.npy", np.array([1.0, 2.0, 3.0, 4.0]))
+    (tmp_path / "k.csv").write_text("# stiffnesses\n1.0, 2.0\n3.0\n")
+    config = tmp_path / "e.toml"
+    config.write_text(HEAD + '[chain]\nn = 4\nk = 1\nalpha = 1.5\nmass = {file = "m.npy"}\n'
+                      'stiffness = {file = "k.csv"}\n')
+    (spec,) = load_experiment(config).runs()
+    np.testing.assert_array_equal(spec.line.mass, [1, 2, 3, 4])
+    np.testing.assert_array_equal(spec.line.stiffness, [1, 2, 3])
+    # the data's hash is part of the configuration: other data is another computation
+    assert len(spec.config["chain"]["mass"]["sha256"]) == 64
+    np.save(tmp_path / "m.npy", np.array([1.0, 2.0, 3.0, 5.0]))
+    (again,) = load_experiment(config).runs()
+    assert again.config_hash != spec.config_hash
+    with pytest.raises(ConfigError, match="changed since"):
+        dataclasses.replace(spec).line  # a spec builds its line when it runs
+
+
+@pytest.mark.parametrize("chain, expected", [
+    ("mass = [1, 1, -1, 1]", "chain.mass[2]: must be > 0, got -1.0"),
+    ("mass = [1, 1, 1]", "chain.mass: expected a number or a list of 4 values, got a list of 3"),
+    ("stiffness = {taper = 0.5, start = -1}", "chain.stiffness[0]: must be > 0, got -1.0"),
+    ("alpha = 1e6", "chain.alpha: must be <= 10 (a steeper law stiffens so abruptly that the "
+                    "solver's steps shrink without end), got 1000000.0"),
+    ("alpha = [1.5, 0.5, 1.5]", "chain.alpha[1]: must be >= 1, got 0.5"),
+    ("mass = {value = 1, impurity = {at = 9, value = 2}}",
+     "chain.mass.impurity.at: 9 is beyond the 4 values"),
+    ("mass = {pattern = []}", "chain.mass.pattern: expected a non-empty list, got []"),
+    ("mass = {taper = 0.9}", "chain.mass.start: required (the first value)"),
+    ("mass = {random = 'uniform', low = 1, high = 2}",
+     "chain.mass.seed: required (the same seed gives the same values)"),
+    ("mass = {value = 1, pattern = [1]}",
+     "chain.mass: a table needs exactly one of value, pattern, taper, random, file "
+     "(got 'value' and 'pattern')"),
+    ("mass = {file = 'nowhere.npy'}", None),
+    ("diameter = 0.01\nmaterial = 'steel'", 'chain.diameter: needs units = "si" (real spheres)'),
+])
+def test_wrong_values_name_their_key_and_index(chain, expected):
+    alpha = "" if "alpha" in chain else "alpha = 1.5\n"
+    lines = problems(HEAD + f"[chain]\nn = 4\nk = 1\n{alpha}{chain}\n")
+    if expected is None:
+        assert lines[0].startswith("chain.mass.file: no such file")
+    else:
+        assert expected in lines
+
+
+def test_a_wrong_value_is_one_line_and_exit_2_without_traceback(tmp_path):
+    config = tmp_path / "bad.toml"
+    config.write_text(HEAD + "[chain]\nn = 4\nk = 1\nalpha = 1.5\nmass = [1, 1, -1, 1]\n")
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert result.stderr.strip() == f"{config}: chain.mass[2]: must be > 0, got -1.0"
+    assert "Traceback" not in result.output
+
+
+# --- lines without a terminal state need t_end -------------------------------------------
+
+
+@pytest.mark.parametrize("extra, why", [
+    ("force = 0.1\n", "chain.force keeps doing work"),
+    ("force = {value = 0.0, impurity = {at = 2, value = 1.0}}\n", "chain.force keeps doing work"),
+    ("[walls.left]\n[walls.right]\n", "the line is held between two walls"),
+])
+def test_no_terminal_state_needs_t_end(extra, why):
+    text = HEAD + f"[chain]\nn = 4\nk = 1\nalpha = 1.5\n{extra}"
+    (line,) = [x for x in problems(text) if x.startswith("solver.t_end")]
+    assert why in line and "no terminal state" in line
+    parse_experiment(text + "[solver]\nt_end = 5.0\n", "toml")  # fine with a stop time
+
+
+# --- SI: materials and Hertz -------------------------------------------------------------
+
+
+def test_hertz_of_identical_spheres():
+    for m in MATERIALS.values():
+        d = 0.0254
+        kappa = physics.hertz_stiffness(m.young, m.poisson, d / 2, m.young, m.poisson, d / 2)
+        assert kappa == pytest.approx(m.young * math.sqrt(d) / (3 * (1 - m.poisson**2)),
+                                      rel=1e-14)
+
+
+def test_every_preset_cites_its_source():
+    assert {"steel", "stainless_steel", "chrome_steel", "brass", "aluminium", "glass", "ptfe",
+            "tungsten_carbide"} <= set(MATERIALS)
+    for m in MATERIALS.values():
+        assert "[" in m.source and m.young > 0 and 0 < m.poisson < 0.5 and m.density > 0
+
+
+def test_si_cradle_masses_and_stiffnesses():
+    steel = MATERIALS["steel"]
+    line = line_of(HEAD + 'units = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
+                   'diameter = 0.0254\nmaterial = "steel"\n[walls.right]\nmaterial = "brass"\n')
+    np.testing.assert_allclose(line.mass, steel.density * math.pi * 0.0254**3 / 6, rtol=1e-15)
+    np.testing.assert_allclose(line.stiffness, steel.young * math.sqrt(0.0254)
+                               / (3 * (1 - steel.poisson**2)), rtol=1e-14)
+    np.testing.assert_array_equal(line.alpha, 1.5)
+    np.testing.assert_array_equal(line.velocity, [0.5, 0, 0, 0, 0])
+    brass = MATERIALS["brass"]
+    e_star = 1 / ((1 - steel.poisson**2) / steel.young + (1 - brass.poisson**2) / brass.young)
+    assert line.right.stiffness == pytest.approx(4 / 3 * e_star * math.sqrt(0.0127), rel=1e-14)
+
+
+def test_si_mixed_materials_and_explicit_constants():
+    line = line_of(HEAD + 'units = "si"\n[chain]\nn = 3\nvelocity = [1.0, 0.0, 0.0]\n'
+                   'diameter = [0.01, 0.02, 0.01]\nyoung = 1e9\npoisson = 0.25\n'
+                   'density = 1000\n')
+    r1, r2 = 0.005, 0.01
+    e_star = 1e9 / (2 * (1 - 0.25**2))
+    assert line.stiffness[0] == pytest.approx(4 / 3 * e_star * math.sqrt(r1 * r2 / (r1 + r2)))
+    assert line.mass[1] == pytest.approx(1000 * math.pi * 0.02**3 / 6)
+
+
+@pytest.mark.parametrize("chain, expected", [
+    ("diameter = 0.01\nmaterial = 'steel'\nstiffness = 1e9",
+     "chain.stiffness: set by the material and diameter (Hertz, alpha = 3/2); give one or "
+     "the other"),
+    ("material = 'steel'", "chain.diameter: required with a material (m)"),
+    ("diameter = 0.01\nmaterial = 'steel'\nyoung = 1e9",
+     "chain.young: give chain.material or explicit constants, not both"),
+    ("diameter = 0.01\nyoung = 1e9", "chain.poisson: required with explicit constants "
+                                     "(or give chain.material)"),
+    ("diameter = 0.01\nmaterial = ['steel', 'glass', 'wood']",
+     "chain.material[2]: unknown material 'wood'"),
+])
+def test_si_conflicts(chain, expected):
+    lines = problems(HEAD + f'units = "si"\n[chain]\nn = 3\nk = 1\n{chain}\n')
+    assert any(line.startswith(expected) for line in lines), lines
+
+
+def test_units_must_be_known():
+    assert problems(HEAD + 'units = "SI"\n[chain]\nn = 3\nk = 1\nalpha = 1\n') == [
+        "units: expected one of 'paper', 'si', got 'SI'"]
+
+
+# --- precompression ----------------------------------------------------------------------
+
+
+def _contact_forces(line: Line) -> np.ndarray:
+    """F_0 (left wall, or 0), F_1..F_{N-1}, F_N (right wall, or 0) at the initial state."""
+    x = line.position
+    inner = np.clip(x[:-1] - x[1:] - line.gap, 0, None) ** line.alpha * line.stiffness
+    left = 0.0 if line.left is None else line.left.stiffness * max(
+        -x[0] - line.left.gap, 0.0) ** line.left.alpha
+    right = 0.0 if line.right is None else line.right.stiffness * max(
+        x[-1] - line.right.gap, 0.0) ** line.right.alpha
+    return np.concatenate(([left], inner, [right]))
+
+
+@pytest.mark.parametrize("k", [0, 1, 3])
+def test_precompressed_balls_are_in_equilibrium(k):
+    rng = np.random.default_rng(k)
+    n = 12
+    velocity = np.zeros(n)
+    velocity[:k] = 1.0
+    line = Line.make(n, mass=rng.uniform(0.5, 2, n), stiffness=rng.uniform(0.5, 2, n - 1),
+                     alpha=rng.choice([1.0, 1.5, 2.5], n - 1), gap=rng.uniform(0, 0.1, n - 1),
+                     velocity=velocity, right=Wall(3.0, 1.5, 0.05))
+    load = 0.7
+    p = precompress(line, load)
+    assert strikers(p) == k
+    F = _contact_forces(p)
+    net = F[:-1] - F[1:] + p.force  # F_{j-1} - F_j + f_j for every ball
+    np.testing.assert_allclose(net[k:], 0.0, atol=1e-14)
+    np.testing.assert_allclose(F[k + 1:], load, rtol=1e-14)
+    # the strikers meet ball K+1 as without the load
+    if k:
+        np.testing.assert_array_equal(p.position[:k], p.position[k])
+    assert not p.has_terminal_state
+
+
+def test_precompression_needs_a_wall_and_t_end():
+    text = HEAD + "[chain]\nn = 4\nk = 1\nalpha = 1.5\nprecompression = 1.0\n"
+    lines = problems(text + "[solver]\nt_end = 1.0\n")
+    assert lines == ["chain.precompression: precompression needs a right wall to push against"]
+    lines = problems(text + "[walls.right]\n")
+    assert lines == ["solver.t_end: required: chain.precompression keeps pushing, so the run "
+                     "has no terminal state"]
+    line = line_of(text + "[walls.right]\n[solver]\nt_end = 1.0\n")
+    assert line.force[1] == 1.0 and line.position[-1] == 1.0
+
+
+# --- paper configs stay as they were; sweeps of new keys --------------------------------
+
+
+def test_paper_config_has_the_paper_line_and_its_old_hash():
+    (spec,) = parse_experiment(HEAD + "[chain]\nn = 5\nk = 2\nalpha = 1.5\n", "toml").runs()
+    assert spec.chain is None and spec.units == "paper"
+    assert spec.config["chain"] == {"n": 5, "k": 2, "alpha": 1.5} and "walls" not in spec.config
+    line = spec.line
+    assert line.is_paper and line.n == 5 and strikers(line) == 2
+
+
+def test_sweeps_of_new_keys():
+    exp = parse_experiment(HEAD + "[chain]\nn = 4\nk = 1\nalpha = 1.5\n[walls.right]\n"
+                           "[solver]\nt_end = 3.0\n[sweep]\n\"chain.speed\" = [0.5, 2.0]\n"
+                           "walls.right.gap = [0.0, 0.1]\nchain.precompression = [1.0]\n",
+                           "toml")
+    specs = exp.runs()
+    assert [s.run_id for s in specs] == [
+        "speed=0.5_right_gap=0.0_precompression=1.0", "speed=0.5_right_gap=0.1_precompression=1.0",
+        "speed=2.0_right_gap=0.0_precompression=1.0", "speed=2.0_right_gap=0.1_precompression=1.0"]
+    assert len({s.config_hash for s in specs}) == 4
+    last = specs[-1].line
+    assert last.velocity[0] == 2.0 and last.right.gap == 0.1 and last.force[1] == 1.0
+    assert specs[-1].config["walls"] == {"right": {"gap": 0.1}}
+
+
+def test_a_sweep_names_the_combination_that_fails():
+    lines = problems(HEAD + "[chain]\nn = 4\nk = 1\nalpha = 1.5\n[sweep]\n"
+                     "\"chain.force\" = [0.0, 1.0]\n")
+    assert lines == ["sweep (force=1.0): solver.t_end: required: chain.force keeps doing work, "
+                     "so the run has no terminal state"]
+
+
+# --- the run file records the model ------------------------------------------------------
+
+
+def _fake_solution(spec) -> Solution:
+    n = spec.n
+    diag = Diagnostics(steps=1, rejected_steps=0, events=0, momentum_error=0.0,
+                       energy_error=0.0, energy_correction=0.0, wall_time=0.0, max_window=1,
+                       rtol=spec.rtol, velocity_floor=1e-12)
+    z = np.zeros(n)
+    return Solution(n=n, k=spec.k, alpha=spec.alpha, outcome=Outcome.STOP_TIME, message="m",
+                    end_time=1.0, terminal=False, final_position=z, final_velocity=z,
+                    separation_time=z, separation_velocity=z, event_time=np.zeros(0),
+                    event_contact=np.zeros(0, np.int64), event_kind=np.zeros(0, np.int8),
+                    times=np.asarray(spec.times), positions=np.zeros((len(spec.times), n)),
+                    velocities=np.zeros((len(spec.times), n)), diagnostics=diag)
+
+
+def test_si_run_file_records_model_units_and_scales(tmp_path):
+    (spec,) = parse_experiment(HEAD + 'units = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
+                               'diameter = 0.0254\nmaterial = "steel"\n[walls.right]\n'
+                               'material = "steel"\n[output]\ntimes = [0.0, 1e-5]\n',
+                               "toml").runs()
+    path = tmp_path / "run.h5"
+    store.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
+    run = store.read_run(path)
+    assert run.units == "si"
+    np.testing.assert_array_equal(run.model["mass"], spec.line.mass)
+    np.testing.assert_array_equal(run.model["stiffness"], spec.line.stiffness)
+    assert run.model["walls"]["right"]["stiffness"] == spec.line.right.stiffness
+    assert "left" not in run.model["walls"]
+    scales = spec.line.scales()
+    assert run.model["scales"]["time"] == scales.time
+    with h5py.File(path) as h5:
+        assert h5["particles/chain/position/value"].attrs["unit"] == "m"
+        assert h5["particles/chain/velocity/value"].attrs["unit"] == "m/s"
+        assert h5["particles/chain/position/time"].attrs["unit"] == "s"
+        assert h5["model/mass"].attrs["unit"] == "kg"
+        assert h5["model/force"].attrs["unit"] == "N"
+
+
+def test_old_run_files_without_a_model_still_read(tmp_path):
+    (spec,) = parse_experiment(HEAD + "[chain]\nn = 3\nk = 1\nalpha = 1.5\n", "toml").runs()
+    path = tmp_path / "run.h5"
+    store.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
+    with h5py.File(path, "a") as h5:
+        del h5["model"]
+    run = store.read_run(path)
+    assert run.model is None and run.units == "paper"
+
+
+# --- the example configs -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("config", sorted(EXAMPLES.glob("*.toml")), ids=lambda p: p.stem)
+def test_example_configs(config, tmp_path):
+    specs = load_experiment(config).runs()
+    for spec in specs:
+        assert spec.line.n == spec.n
+    from chainrun.solver import simulate_line
+
+    spec = specs[0]
+    try:
+        sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
+    except NotImplementedError:
+        pytest.skip("the general kernel has not landed yet")
+    assert sol.outcome.ok
