@@ -340,8 +340,5 @@ def test_example_configs(config, tmp_path):
     from chainrun.solver import simulate_line
 
     spec = specs[0]
-    try:
-        sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
-    except NotImplementedError:
-        pytest.skip("the general kernel has not landed yet")
+    sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
     assert sol.outcome.ok

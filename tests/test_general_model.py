@@ -5,10 +5,6 @@ external forces and walls (``chainrun.solver.model.Line``), in the line's own un
 The expected values come from closed forms (``closed_forms.py``), from exact scaling
 laws of the equations, or from the independent scipy reference of
 ``tests/reference.py`` (``reference_line``), never from stored chainrun output.
-
-Until the kernels take the general model, ``simulate_line`` raises
-NotImplementedError for any line but the paper's; ``run`` turns that into a skip, so
-the tests of general lines skip cleanly and those of paper lines run.
 """
 
 from __future__ import annotations
@@ -59,13 +55,7 @@ TOL = {
 
 
 def run(line: Line, times=(), **kw):
-    """``simulate_line``, skipping while the general kernels are not on this branch."""
-    try:
-        return simulate_line(line, times, **kw)
-    except NotImplementedError as exc:
-        if line.is_paper:
-            raise
-        pytest.skip(f"simulate_line does not take general lines yet ({exc})")
+    return simulate_line(line, times, **kw)
 
 
 @functools.lru_cache(maxsize=None)
