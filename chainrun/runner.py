@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import math
 import os
 import queue
 import signal
@@ -47,6 +48,11 @@ SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 
 #: Seconds to wait for an existing Dask scheduler to answer.
 CONNECT_TIMEOUT = 20.0
+
+
+def momentum_text(error: float) -> str:
+    """|dP| for a summary; a line against a wall does not conserve momentum (NaN)."""
+    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a (a wall)"
 
 
 @dataclass(frozen=True)
@@ -78,9 +84,14 @@ class RunSummary:
 
     def line(self) -> str:
         """One line: how the run ended, its cost and its conservation errors."""
-        how = f"terminal at t = {self.end_time:.6g}" if self.terminal else self.message
+        if self.terminal:
+            how = f"terminal at t = {self.end_time:.6g}"
+        elif self.outcome == "stop_time":
+            how = f"stopped at t_end = {self.end_time:.6g}"
+        else:
+            how = self.message
         text = (f"{how}, {self.events} events, {self.steps} steps, "
-                f"|dP| = {self.momentum_error:.1e}, |dE|/E = {self.energy_error:.1e}, "
+                f"{momentum_text(self.momentum_error)}, |dE|/E = {self.energy_error:.1e}, "
                 f"{self.wall_time:.2f} s")
         if self.skipped:
             return f"{self.run_id}: skipped, file up to date ({text})"

@@ -21,6 +21,7 @@ def render(s) -> str:
     """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
+    from chainrun.runner import momentum_text
 
     if s.terminal:
         outcome = f"terminal state at t = {s.end_time:.6g}: no collision can happen again"
@@ -40,7 +41,7 @@ def render(s) -> str:
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "
         f"at most {s.max_window} balls integrated at once, {s.wall_time:.2f} s",
-        f"accuracy  |dP| = {s.momentum_error:.1e}, |dE|/E = {s.energy_error:.1e} "
+        f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
         f"balls     fastest: ball {s.fastest[0]} at {s.fastest[1]:.6g}; slowest: ball "
         f"{s.slowest[0]} at {s.slowest[1]:.6g}",
