@@ -893,14 +893,22 @@ class RunData:
         return self.model["units"] if self.model else "paper"
 
     def contact_forces(self, stride: int = 1) -> np.ndarray:
-        """Contact forces ``c_+^alpha`` at the snapshots, from the stored positions, of
-        every ``stride``-th contact (reading only its two balls); shape (T, C)."""
+        """Contact forces ``kappa (c - g)_+^alpha`` at the snapshots, from the stored
+        positions and the line's stiffnesses, exponents and gaps (the paper's law for
+        its line), of every ``stride``-th contact (reading only its two balls); shape
+        (T, C)."""
         n = self.n
+        if self.model is None:
+            law = dict(alpha=self.alpha)
+        else:
+            law = {key: np.asarray(self.model[key])[::stride]
+                   for key in ("alpha", "stiffness", "gap")}
         if stride == 1:
-            return physics.contact_forces(np.asarray(self.positions), self.alpha)
+            return physics.contact_forces(np.asarray(self.positions), **law)
         pairs = np.stack([self.positions[:, 0:n - 1:stride],
                           self.positions[:, 1:n:stride]], axis=-1)
-        return physics.contact_forces(pairs, self.alpha)[..., 0]
+        return physics.contact_forces(pairs, **{k: np.asarray(v)[:, None] if np.ndim(v)
+                                                 else v for k, v in law.items()})[..., 0]
 
     @property
     def k(self) -> int:

@@ -342,3 +342,46 @@ def test_example_configs(config, tmp_path):
     spec = specs[0]
     sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
     assert sol.outcome.ok
+
+
+def test_stored_contact_forces_follow_the_lines_law(tmp_path):
+    # The forces a run file gives from its positions (the views draw them) use each
+    # contact's stiffness, exponent and gap: at the sensor's sample times they equal the
+    # forces the solver sampled on its own step.
+    from helpers import simulate_text
+
+    from chainrun.store import read_run
+
+    out = simulate_text(tmp_path, """
+name = "forces"
+units = "si"
+[chain]
+n = 6
+k = 1
+speed = 0.4
+diameter = [0.02, 0.02, 0.01, 0.02, 0.03, 0.02]
+material = ["steel", "steel", "brass", "steel", "glass", "steel"]
+gap = [0.0, 1.0e-6, 0.0, 2.0e-6, 0.0]
+[walls.right]
+material = "steel"
+gap = 1.0e-6
+[output]
+times = {start = 0.0, stop = 4.0e-4, step = 2.0e-6}
+sensors = [3, 5]
+sensor_dt = 2.0e-6
+""")
+    run = read_run(out / "run.h5")
+    forces = run.contact_forces()
+    assert forces.shape == (201, 5)
+    m = min(len(run.sensor_time), len(run.times))  # (samples go on to the run's end)
+    assert m > 50
+    np.testing.assert_allclose(run.sensor_time[:m], run.times[:m], rtol=1e-12)
+    scale = np.max(np.abs(forces))
+    for s, ball in enumerate((3, 5)):
+        for side in (0, 1):
+            np.testing.assert_allclose(forces[:m, ball - 2 + side],
+                                       run.sensor_force[:m, s, side], rtol=1e-9,
+                                       atol=1e-9 * scale)
+    assert np.max(forces) > 0.0
+    strided = run.contact_forces(stride=2)
+    np.testing.assert_array_equal(strided, forces[:, ::2])

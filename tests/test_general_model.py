@@ -394,3 +394,37 @@ def test_random_lines_many(family):
         assert bool(sol.terminal) is r.terminal, f"seed {seed}: {sol.message}"
         np.testing.assert_allclose(sol.final_velocity, r.final_velocity, rtol=0,
                                    atol=TOL["reference_velocity"], err_msg=f"seed {seed}")
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+def test_precompressed_line_against_reference(alpha):
+    # Balls at rest in their static equilibrium under a load against a wall, struck by
+    # a heavier ball: the disturbance, and nothing else, moves them.
+    from chainrun.solver.model import precompress
+
+    base = Line.make(6, mass=[2.0, 1.0, 1.5, 1.0, 0.5, 1.0], alpha=alpha,
+                     stiffness=[1.0, 2.0, 0.5, 1.0, 3.0], k=1, speed=0.8,
+                     right=Wall(2.0, alpha))
+    line = precompress(base, 0.3)
+    t_max = 12.0
+    sol = run(line, [2.0, 6.0], t_end=t_max)
+    r = reference_line(line, t_max=t_max, times=[2.0, 6.0])
+    assert_ok(sol, terminal=False)
+    np.testing.assert_allclose(sol.final_velocity, r.final_velocity, rtol=0,
+                               atol=TOL["reference_velocity"])
+    np.testing.assert_allclose(sol.velocities, r.velocities, rtol=0,
+                               atol=TOL["reference_velocity"])
+
+
+def test_precompressed_line_at_rest_stays_at_rest():
+    # Without a striker the equilibrium holds: nothing moves beyond rounding.
+    from chainrun.solver.model import precompress
+
+    base = Line.make(5, velocity=[0.0, 0.0, 0.0, 0.0, 0.0], stiffness=[1.0, 2.0, 0.5, 1.0],
+                     alpha=1.5, right=Wall(1.0, 1.5), k=None)
+    with pytest.raises(ValueError, match="ball at rest after the strikers|strikers"):
+        precompress(Line.make(2, k=2, right=Wall(1.0)), 1.0)
+    line = precompress(base, 0.5)
+    sol = run(line, [50.0], t_end=50.0)
+    assert np.max(np.abs(sol.final_velocity)) < 1e-12
+    np.testing.assert_allclose(sol.final_position, line.position, rtol=0, atol=1e-12)

@@ -22,7 +22,10 @@ from chainrun.solver import (
 )
 from chainrun.solver import _jit, _loop, _state
 from chainrun.solver.model import Line
-from chainrun.solver.physics import contact_forces, kinetic_energy, momentum, potential_energy
+from chainrun.solver.physics import (
+    contact_forces, kinetic_energy, line_kinetic_energy, line_momentum,
+    line_potential_energy, momentum, potential_energy,
+)
 
 _EVENT_BUFFER = 1 << 16
 _INITIAL_WINDOW = 256
@@ -142,16 +145,6 @@ class _Prepared:
 
     def velocities(self, v: np.ndarray) -> np.ndarray:
         return v[self.balls] * self.scales.velocity
-
-    def energy(self, y: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic plus contact energy, less the external forces' potential (units of the
-        scales); conserved."""
-        c = y[:-1] - y[1:]
-        pos = c > 0.0
-        pe = float(np.sum(self.kappa[pos] * c[pos] ** (self.alpha[pos] + 1.0)
-                          / (self.alpha[pos] + 1.0)))
-        ke = 0.5 * float(np.sum(self.mass * v * v))
-        return ke + pe - float(np.sum(self.mass * self.acc * y))
 
 
 def _alloc_window(cap: int) -> dict:
@@ -481,31 +474,36 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
 
 
 def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
-    """Conservation checks in the units of the scales (those of the paper for its line).
+    """Conservation checks of the run just ended (final internal state y, v at time t).
 
-    Momentum changes by the external forces' impulse, ``sum f t``; with a wall it is
-    not checked (the wall's impulse is not tracked), and its error is NaN. Energy:
-    kinetic plus contact energy less the external forces' work is conserved; the errors
-    are relative to the initial energy (or, for a line starting at rest, to the work).
+    The paper's line: momentum and energy in its units, absolute and relative to the
+    initial energy K/2, as ever. Any other line, in its own units (``physics``): the
+    momentum changes by the external forces' impulse ``sum f t`` (with a wall it is not
+    checked, the wall's impulse not being tracked: NaN), relative to the momentum of the
+    line's scales; kinetic plus contact energy less the forces' work is conserved,
+    relative to the initial energy (or, for a line starting at rest, to the work).
     """
-    m = P.mass
-    if P.unit and P.lw == 0 and P.rw == 0 and P.mode != _state.MODE_MIXED \
-            and np.all(P.kappa == 1.0) and np.all(P.y0 == 0.0):
-        # the paper's line: momentum sum v, energy sum v^2/2 + contacts, as ever
+    line = P.line
+    if line.is_paper and np.all(line.alpha == P.alpha0):
         p_err = abs(float(momentum(v)) - float(momentum(P.v0)))
         e0 = float(kinetic_energy(P.v0))
         e1 = float(kinetic_energy(v) + potential_energy(y, P.alpha0))
         scale = e0
+        eproj = float(S.fs[_state.F_EPROJ])
     else:
-        if P.lw or P.rw:
+        sc = P.scales
+        x0, v0 = line.position, line.velocity
+        x1, v1 = P.positions(y), P.velocities(v)
+        m = line.mass
+        if line.left is not None or line.right is not None:
             p_err = math.nan
         else:
-            p_exp = float(np.sum(m * P.v0)) + float(np.sum(m * P.acc)) * t
-            p_err = abs(float(np.sum(m * v)) - p_exp)
-        e0 = P.energy(P.y0, P.v0)
-        e1 = P.energy(y, v)
-        work = abs(float(np.sum(m * P.acc * (y - P.y0))))
-        scale = max(abs(e0), work)
+            p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t * sc.time
+            p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
+        e0 = float(line_kinetic_energy(v0, m) + line_potential_energy(x0, line))
+        e1 = float(line_kinetic_energy(v1, m) + line_potential_energy(x1, line))
+        scale = max(abs(e0), abs(float(line.force @ (x1 - x0))))
+        eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0
     return Diagnostics(
@@ -514,7 +512,7 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
         events=events,
         momentum_error=p_err,
         energy_error=abs(e1 - e0) / scale,
-        energy_correction=float(S.fs[_state.F_EPROJ]) / scale,
+        energy_correction=eproj / scale,
         wall_time=wall,
         max_window=int(S.ints[_state.I_MAXWIN]),
         rtol=float(rtol),

@@ -15,13 +15,16 @@ def compressions(x: np.ndarray) -> np.ndarray:
     return x[..., :-1] - x[..., 1:]
 
 
-def contact_forces(x: np.ndarray, alpha, stiffness=1.0) -> np.ndarray:
-    """Force of each contact, ``kappa c_+^alpha`` (it never pulls); shape (..., N-1).
+def contact_forces(x: np.ndarray, alpha, stiffness=1.0, gap=0.0) -> np.ndarray:
+    """Force of each contact, ``kappa (c - g)_+^alpha`` (it never pulls); shape (..., N-1).
 
-    ``alpha`` and ``stiffness`` are numbers or one per contact; the compressions are
-    the plain differences of ``x`` (positions measured with the gaps taken out).
+    ``alpha``, ``stiffness`` and ``gap`` are numbers or one per contact; ``c`` are the
+    differences of ``x`` (``compressions``), so a gap of 0 gives the paper's law.
     """
-    f = np.clip(compressions(x), 0.0, None) ** alpha
+    c = compressions(x)
+    if np.any(np.asarray(gap) != 0.0):
+        c = c - gap
+    f = np.clip(c, 0.0, None) ** alpha
     return f if np.all(np.asarray(stiffness) == 1.0) else f * stiffness
 
 
