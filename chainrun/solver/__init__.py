@@ -1,12 +1,17 @@
-"""The event-driven solver: the public types and the ``simulate`` driver.
+"""The event-driven solver: the public types and the ``simulate`` drivers.
 
-This package owns the dynamics and nothing else: it turns (N, K, alpha, output times,
-accuracy) into arrays and never touches files. ``_driver`` runs the numba kernels
-between output times, maps their integer status codes to named outcomes, and hands
-snapshots to an observer hook. The kernels, each module importing only those above it::
+This package owns the dynamics and nothing else: it turns a line of balls (``Line``:
+masses, contacts, walls, forces; or the paper's N, K, alpha), output times and an
+accuracy into arrays, and never touches files. ``model`` defines the line and the
+scales it is solved in; ``physics`` the force law and the conserved quantities for
+the store and the analysis; ``_driver`` converts the line to those scales, runs the
+numba kernels between output times, maps their integer status codes to named
+outcomes, and hands snapshots to an observer hook. The kernels, each module importing
+only those above it::
 
     _jit          how kernels are compiled, cached and loaded
-    _state        the State arrays, their scalar slots, status codes, shared constants
+    _state        the State arrays, their scalar slots and parameter rows, status
+                  codes, shared constants, free flight
     _forces       the force law: contact forces, accelerations, contact energy
     _generated    DOP853 stages and Taylor-series sums as straight-line code, written
                   whole by ``_codegen`` (``python -m chainrun.solver._codegen``)
@@ -18,12 +23,13 @@ snapshots to an observer hook. The kernels, each module importing only those abo
     _events       locating the first contact event in a step
     _loop         the step loop: ``advance`` and ``_snapshot``, the entry points
 
-Equations (paper units, every coefficient 1), for balls n = 1..N::
+Equations, for balls n = 1..N (``model``; in the paper's units every coefficient is 1
+and there is no gap, wall or force)::
 
-    x_n'' = (x_{n-1} - x_n)_+^alpha - (x_n - x_{n+1})_+^alpha
+    m_n x_n'' = F_{n-1} - F_n + f_n,   F_j = kappa_j (x_j - x_{j+1} - g_j)_+^alpha_j
 
-with x_n(0) = 0, x_n'(0) = 1 for n <= K and 0 otherwise. Contact j joins balls j and
-j+1 (0-based here: contact j joins balls j and j+1 of the arrays).
+Contact j joins balls j and j+1 (0-based here: contact j joins balls j and j+1 of the
+arrays); a wall is a contact with a ball of infinite mass at rest.
 """
 
 from __future__ import annotations
