@@ -2,8 +2,9 @@
 
 Read from a run file only (``chainrun.store.RunData``), in the conventions of
 ``derived``: a ball *rebounds* when its final velocity is negative, is *ejected* when it
-moves forward faster than ``SIGNIFICANT`` (1% of the impact velocity), and is *left
-behind* otherwise; energies are shares of the impact energy K/2.
+moves forward faster than ``SIGNIFICANT`` (1% of the impact velocity: of the fastest
+initial speed, for a general line), and is *left behind* otherwise; energies are shares
+of the impact energy K/2 (the paper's line only).
 """
 
 from __future__ import annotations
@@ -115,7 +116,11 @@ def summarize(run) -> RunSummary:
     v = np.asarray(run.final_velocity, dtype=float)
     k = run.k
     impact = 0.5 * k
-    back, ahead = v < 0.0, v > SIGNIFICANT
+    # "ejected": faster than 1% of the impact velocity, the fastest initial speed of a
+    # general line (in its units)
+    speed = (float(np.max(np.abs(run.model["velocity"]))) if run.model is not None
+             else 1.0) or 1.0
+    back, ahead = v < 0.0, v > SIGNIFICANT * speed
     behind = ~back & ~ahead
     kinetic = {name: float(kinetic_energy(v[mask])) / impact
                for name, mask in (("rebound", back), ("ejected", ahead),

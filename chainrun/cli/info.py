@@ -45,7 +45,8 @@ def render(s) -> str:
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
         f"balls     fastest: ball {s.fastest[0]} at {s.fastest[1]:.6g}; slowest: ball "
         f"{s.slowest[0]} at {s.slowest[1]:.6g}",
-        f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 0.01), "
+        f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 1% of the "
+        f"impact speed), "
         f"{s.left_behind} left behind",
         *([] if s.model else [  # shares of K/2: the paper's line only
             f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
