@@ -95,11 +95,15 @@ class Outcome(enum.Enum):
 class Diagnostics:
     """Cost and accuracy of one run.
 
-    momentum_error is absolute (the initial momentum is K); energy_error is relative to
-    the initial energy K/2. Each cluster's internal energy is projected back to its
-    conserved value at every change of structure (see ``_projection._project_energy``);
-    energy_correction is the sum of those corrections relative to K/2, the honest
-    measure of the integration error that the projection removes.
+    For the paper's line, momentum_error is absolute (the initial momentum is K) and
+    energy_error relative to the initial energy K/2. For any other line, momentum_error
+    is relative to the momentum of its scales (NaN with a wall, which takes momentum)
+    and energy_error to its initial kinetic energy, with the external forces' work
+    accounted (``_driver._diagnostics``). Each cluster's internal energy is projected
+    back to its conserved value at every change of structure (see
+    ``_projection._project_energy``); energy_correction is the sum of those corrections,
+    relative like energy_error, the honest measure of the integration error that the
+    projection removes.
     """
 
     steps: int

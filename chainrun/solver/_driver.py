@@ -481,7 +481,8 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     momentum changes by the external forces' impulse ``sum f t`` (with a wall it is not
     checked, the wall's impulse not being tracked: NaN), relative to the momentum of the
     line's scales; kinetic plus contact energy less the forces' work is conserved,
-    relative to the initial energy (or, for a line starting at rest, to the work).
+    relative to the initial kinetic energy (or, for a line starting at rest, to its
+    initial energy or the work, the larger).
     """
     line = P.line
     if line.is_paper and np.all(line.alpha == P.alpha0):
@@ -500,9 +501,12 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
         else:
             p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t * sc.time
             p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
-        e0 = float(line_kinetic_energy(v0, m) + line_potential_energy(x0, line))
+        k0 = float(line_kinetic_energy(v0, m))
+        e0 = k0 + float(line_potential_energy(x0, line))
         e1 = float(line_kinetic_energy(v1, m) + line_potential_energy(x1, line))
-        scale = max(abs(e0), abs(float(line.force @ (x1 - x0))))
+        # relative to the energy of the impact (a precompressed line stores far more,
+        # at rest), or for a line starting at rest to the energy it takes up
+        scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
         eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0
