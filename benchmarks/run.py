@@ -20,12 +20,20 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 5. k80: N = 2000, K = 80, Hertz, to the terminal state.
 6. memory: peak resident memory of ``chainrun simulate``, N = 10^6, 200 snapshots
    (and 2, to show it does not depend on their number).
+7. general: the paper's Hertz line against a random one (masses and stiffnesses
+   uniform in [1, 10), fixed seeds), K = 1, to the terminal state, as processes, and
+   the ratio (the requirement: within 2x at N = 10^6); a random-line size predicted
+   over its cap is skipped. The steel line in SI units against the paper's, N = 10^5.
+8. previous: this version against a previous one (``--against REV``; by default the
+   solver before its latest change), checked out into a temporary git worktree, on
+   Hertz N = 10^4 and 10^6 and linear N = 10^5, the two versions' runs alternating.
 
 Examples::
 
-    python -m benchmarks.run                 # default, 8-13 minutes
+    python -m benchmarks.run                 # default, 13-18 minutes
     python -m benchmarks.run --full          # everything, the largest cases too
     python -m benchmarks.run --only peers scaling
+    python -m benchmarks.run --only previous --against main~3
 """
 
 from __future__ import annotations
@@ -51,7 +59,8 @@ import numpy as np
 from benchmarks.peers import PeerResult, PeerUnavailable
 
 ROOT = Path(__file__).resolve().parents[1]
-SECTIONS = ("compile", "peers", "scaling", "targets", "k80", "memory")
+SECTIONS = ("compile", "peers", "scaling", "targets", "k80", "memory", "general",
+            "previous")
 
 #: The accuracy each tool claims for the final velocities (max abs error, paper
 #: units): chainrun's target in issue 6, the scipy and heyoka settings' measured
@@ -64,6 +73,20 @@ REFERENCE_RTOL = 1e-14
 SHORT = 5.0
 #: The same for the points of the scaling series.
 SERIES_SHORT = 2.0
+
+#: The general section's random line: masses and stiffnesses uniform in [1, 10) (ratios
+#: up to 10), with fixed seeds, so that every bench runs the same line.
+RANDOM_LINE = {"mass": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 1},
+               "stiffness": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 2}}
+#: Its steel line in SI units: beads of one inch, the first striking at 0.5 m/s.
+SI_LINE = {"speed": 0.5, "diameter": 0.0254, "material": "steel"}
+#: The requirement on the random line: at most this many times the paper's line's time,
+#: at the general section's largest N.
+GENERAL_LIMIT = 2.0
+#: The environment variable naming the previous section's revision (as --against does).
+AGAINST_ENV = "CHAINRUN_BENCH_AGAINST"
+#: The default previous version is the solver before the latest change under this path.
+SOLVER_PATH = "chainrun/solver"
 
 
 @dataclass
@@ -87,24 +110,40 @@ class Mode:
     # (label, N, alpha, limit in seconds): whole processes to the terminal state
     targets: tuple = (("Hertz", 1_000_000, 1.5, 10.0), ("linear", 100_000, 1.0, 30.0))
     target_runs: int = 3
+    # general: the paper's Hertz line against RANDOM_LINE, to the terminal state; a
+    # random-line size predicted over general_cap seconds is skipped (the requirement is
+    # read at the largest N)
+    general_n: tuple = (300, 1000, 10_000, 1_000_000)
+    general_cap: float = 60.0
+    general_runs: int = 3
+    units_n: int = 100_000            # the SI steel line against the paper's
+    # previous: (label, N, alpha) to the terminal state, both versions alternating
+    previous_cases: tuple = (("Hertz", 10_000, 1.5), ("Hertz", 1_000_000, 1.5),
+                             ("linear", 100_000, 1.0))
+    previous_runs: int = 5
 
     @classmethod
     def make(cls, full: bool, smoke: bool = False) -> "Mode":
-        if smoke:                     # the harness itself, in a minute: tiny sizes
+        if smoke:                     # the harness itself, in two minutes: tiny sizes
             return cls(full=False, peers_n=(30, 60), scipy_max_n=60, peers_cap=10.0,
                        hertz_n=(100, 200, 400),
                        linear_n=(50, 100, 200), hertz_budget=10.0, linear_budget=10.0,
                        linear_peer_n=(30, 60), peer_point_cap=10.0, k80_timeout=5.0,
                        memory_t_end=20.0, memory_n=10_000,
                        targets=(("Hertz", 2000, 1.5, 10.0), ("linear", 500, 1.0, 30.0)),
-                       target_runs=2)
+                       target_runs=2, general_n=(30, 100, 300), general_cap=10.0,
+                       general_runs=2, units_n=1000,
+                       previous_cases=(("Hertz", 200, 1.5), ("Hertz", 2000, 1.5),
+                                       ("linear", 500, 1.0)),
+                       previous_runs=2)
         if not full:
             return cls(full=False)
         return cls(full=True, peers_n=(250, 1000, 4000, 10_000), scipy_max_n=10_000,
                    peers_cap=math.inf,
                    hertz_budget=math.inf, linear_budget=math.inf,
                    linear_peer_n=(100, 300, 1000, 3000), peer_point_cap=600.0,
-                   k80_timeout=3600.0, k80_process=True, memory_t_end=None)
+                   k80_timeout=3600.0, k80_process=True, memory_t_end=None,
+                   general_cap=4 * 3600.0)
 
 
 # --- small utilities ---------------------------------------------------------------------
@@ -271,9 +310,32 @@ def chainrun_command() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "chainrun"]
 
 
-def config_text(name: str, n: int, k: int, alpha: float, *, t_end: float | None = None,
-                times=None) -> str:
-    lines = [f'name = "{name}"', "[chain]", f"n = {n}", f"k = {k}", f"alpha = {alpha!r}"]
+def _toml(value) -> str:
+    """A TOML value: a number, a string, a list or an inline table of those."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(value)
+
+
+def config_text(name: str, n: int, k: int, alpha: float | None, *,
+                t_end: float | None = None, times=None, chain: dict | None = None,
+                top: dict | None = None) -> str:
+    """An experiment file of one run: the paper's line of ``n`` balls, ``k`` strikers,
+    exponent ``alpha`` (None: left to a material), with the keys of ``chain`` added to
+    ``[chain]`` (masses, stiffnesses, materials...) and those of ``top`` (``units``)
+    at the top level."""
+    lines = [f'name = "{name}"']
+    lines += [f"{key} = {_toml(v)}" for key, v in (top or {}).items()]
+    lines += ["[chain]", f"n = {n}", f"k = {k}"]
+    if alpha is not None:
+        lines.append(f"alpha = {alpha!r}")
+    lines += [f"{key} = {_toml(v)}" for key, v in (chain or {}).items()]
     if times is not None:
         lines += ["[output]", "times = [" + ", ".join(repr(float(t)) for t in times) + "]"]
     if t_end is not None:
@@ -288,6 +350,7 @@ class ProcessRun:
     maxrss_mb: float | None
     final_velocity: np.ndarray | None = None
     error: str | None = None
+    diagnostics: dict | None = None       # the run file's /diagnostics and outcome
 
 
 class Processes:
@@ -298,7 +361,7 @@ class Processes:
         self.count = 0
 
     def run(self, text: str, *, env: dict | None = None, timeout: float | None = None,
-            read_velocity: bool = True) -> ProcessRun:
+            read_velocity: bool = True, read_diagnostics: bool = False) -> ProcessRun:
         self.count += 1
         folder = self.scratch / f"proc{self.count}"
         folder.mkdir()
@@ -316,6 +379,10 @@ class Processes:
             proc.communicate()
             shutil.rmtree(folder, ignore_errors=True)
             return ProcessRun(None, None, None, error=f"timed out after {timeout:.0f} s")
+        except BaseException:                         # interrupted: leave no run behind
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            raise
         try:
             report = json.loads(stdout.strip().splitlines()[-1])
         except (IndexError, json.JSONDecodeError):
@@ -325,10 +392,17 @@ class Processes:
         if report.get("rc") != 0:
             tail = (folder / "log.txt").read_text()[-400:] if (folder / "log.txt").exists() else ""
             result.error = f"exit status {report.get('rc')}: {tail.strip()}"
-        elif read_velocity:
+        elif read_velocity or read_diagnostics:
             import h5py
             with h5py.File(out / "run.h5", "r") as f:
-                result.final_velocity = f["results/final_velocity"][:]
+                if read_velocity:
+                    result.final_velocity = f["results/final_velocity"][:]
+                if read_diagnostics:
+                    d = {k: v.item() if isinstance(v, np.generic) else v
+                         for k, v in f["diagnostics"].attrs.items()}
+                    r = f["results"].attrs
+                    d.update(outcome=str(r["outcome"]), end_time=float(r["end_time"]))
+                    result.diagnostics = d
         shutil.rmtree(folder, ignore_errors=True)
         return result
 
@@ -652,7 +726,346 @@ def section_memory(mode: Mode, procs: Processes) -> dict:
     return out
 
 
+def median(xs) -> float | None:
+    return float(np.median(xs)) if len(xs) else None
+
+
+def alternate(procs: Processes, jobs: dict[str, dict], runs: int, *,
+              read_diagnostics: bool = False) -> dict:
+    """Run each job ``runs`` times, alternating (a, b, a, b, ...): this host's speed
+    drifts by several per cent over minutes, and alternating spreads the drift over
+    both. ``jobs`` maps a name to ``dict(text=config, env=..., timeout=...)``. Returns
+    name -> walls, cpus, errors, and the first run's diagnostics when asked; the first
+    failure ends every job's runs (a comparison with one side missing is none)."""
+    out = {name: {"walls": [], "cpus": [], "errors": [], "diagnostics": None}
+           for name in jobs}
+    for _ in range(runs):
+        for name, job in jobs.items():
+            r = procs.run(job["text"], env=job.get("env"), timeout=job.get("timeout"),
+                          read_velocity=False, read_diagnostics=read_diagnostics)
+            if r.error:
+                out[name]["errors"].append(r.error)
+                log(f"  {name}: {r.error}")
+                return out
+            out[name]["walls"].append(r.wall)
+            out[name]["cpus"].append(r.cpu)
+            if out[name]["diagnostics"] is None:
+                out[name]["diagnostics"] = r.diagnostics
+            log(f"  {name}: {fmt_t(r.wall)} s (cpu {fmt_t(r.cpu)} s)")
+    return out
+
+
+def _ratio(a: dict, b: dict, stat=median) -> float | None:
+    """stat(a's walls) / stat(b's walls), None unless both have times."""
+    if not a or not b or not a["walls"] or not b["walls"]:
+        return None
+    return stat(a["walls"]) / stat(b["walls"])
+
+
+def section_general(mode: Mode, procs: Processes) -> dict:
+    """The paper's Hertz line against a random line (RANDOM_LINE) of the same N, K = 1,
+    to the terminal state, as whole processes, runs alternating; then the steel line in
+    SI units against the paper's line of ``units_n`` balls.
+
+    The random line's terminal state costs far more than the paper's line's (the wave
+    scatters, and its fragments collide until the velocities are sorted): a size
+    whose predicted time is over ``general_cap`` is skipped, with the prediction."""
+    out = {"random_line": RANDOM_LINE, "limit": GENERAL_LIMIT,
+           "requirement_n": max(mode.general_n), "runs": mode.general_runs, "series": []}
+    done: list[tuple[int, float]] = []       # (N, solver time) of the random line
+    stopped = None
+    for n in mode.general_n:
+        log(f"general: N = {n}, the paper's line and the random line, K = 1, to the "
+            f"terminal state, as processes")
+        jobs = {"uniform": {"text": config_text(f"general-uniform-{n}", n, 1, 1.5),
+                            "timeout": 600.0}}
+        point = {"n": n}
+        # the random line's solver time, predicted from its smaller sizes
+        guess = _predict(done, n) if done else None
+        if stopped:
+            point["random_skipped"] = stopped
+        elif guess is not None and guess > mode.general_cap:
+            point["random_skipped"] = (f"predicted solver time {fmt_t(guess)} s > "
+                                       f"{fmt_t(mode.general_cap)} s"
+                                       + ("" if mode.full else " (--full for more)"))
+        else:
+            budget = mode.general_cap if guess is None else max(guess, mode.general_cap)
+            jobs["random"] = {"text": config_text(f"general-random-{n}", n, 1, 1.5,
+                                                  chain=RANDOM_LINE),
+                              "timeout": 4 * budget + 60}
+        if "random_skipped" in point:
+            log(f"  random: skipped, {point['random_skipped']}")
+        point.update(alternate(procs, jobs, mode.general_runs, read_diagnostics=True))
+        point["ratio"] = _ratio(point.get("random"), point["uniform"])
+        uni, rnd = point["uniform"], point.get("random")
+        if guess is not None and uni["walls"]:
+            # and the process's start-up and file: the paper's line's whole time, at most
+            point["random_predicted"] = guess + median(uni["walls"])
+        if rnd and rnd["walls"] and not rnd["errors"] and rnd["diagnostics"]:
+            done.append((n, rnd["diagnostics"]["wall_time"]))
+        elif rnd:
+            stopped = f"the random line failed at N = {n}"
+        out["series"].append(point)
+    last = out["series"][-1]
+    out["requirement"] = _general_verdict(last)
+
+    n = mode.units_n
+    log(f"general: N = {n}, the steel line in SI units against the paper's line")
+    jobs = {"paper": {"text": config_text(f"units-paper-{n}", n, 1, 1.5), "timeout": 600.0},
+            "si": {"text": config_text(f"units-si-{n}", n, 1, None, top={"units": "si"},
+                                       chain=SI_LINE), "timeout": 600.0}}
+    units = {"n": n, "si_line": SI_LINE}
+    units.update(alternate(procs, jobs, mode.general_runs, read_diagnostics=True))
+    units["ratio"] = _ratio(units["si"], units["paper"])
+    dp, ds = units["paper"]["diagnostics"], units["si"]["diagnostics"]
+    units["same_work"] = (None if not dp or not ds else
+                          (dp["events"], dp["steps"]) == (ds["events"], ds["steps"]))
+    out["units"] = units
+    return out
+
+
+def _general_verdict(point: dict) -> dict:
+    """The requirement (random / paper line <= GENERAL_LIMIT) at the largest N:
+    measured, or, where the random line was skipped, its prediction."""
+    uni = point["uniform"]
+    if point.get("ratio") is not None:
+        return {"n": point["n"], "ratio": point["ratio"], "measured": True,
+                "met": point["ratio"] <= GENERAL_LIMIT}
+    guess = point.get("random_predicted")
+    if guess is not None and uni["walls"]:
+        ratio = guess / median(uni["walls"])
+        return {"n": point["n"], "ratio": ratio, "measured": False,
+                "met": ratio <= GENERAL_LIMIT}
+    return {"n": point["n"], "ratio": None, "measured": False, "met": None}
+
+
+# --- the previous version ------------------------------------------------------------------
+
+
+def git(root: Path, *args: str) -> str:
+    """``git -C root args``; its output, stripped. RuntimeError (with git's message)
+    when it fails."""
+    r = subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"git {' '.join(args)}: {(r.stderr or r.stdout).strip()}")
+    return r.stdout.strip()
+
+
+def resolve_against(rev: str | None, root: Path = ROOT, environ=None) -> dict:
+    """The revision the previous section compares with, as a commit.
+
+    ``rev`` (``--against``), else ``$CHAINRUN_BENCH_AGAINST``, else the solver as it
+    was before its latest change: with uncommitted changes under ``chainrun/solver``,
+    HEAD; otherwise the first parent of the newest commit on HEAD's first-parent
+    history that changed it (a merge counts as one change). Returns dict(commit,
+    asked, why, subject); ValueError when it cannot be resolved.
+    """
+    environ = os.environ if environ is None else environ
+    asked, source = rev, "--against"
+    if not asked:
+        asked, source = environ.get(AGAINST_ENV) or None, f"${AGAINST_ENV}"
+    try:
+        if asked:
+            commit = git(root, "rev-parse", "--verify", "--quiet", f"{asked}^{{commit}}")
+            why = f"{asked} ({source})"
+        elif git(root, "status", "--porcelain", "--", SOLVER_PATH):
+            commit = git(root, "rev-parse", "--verify", "HEAD")
+            why = f"HEAD: {SOLVER_PATH}/ has uncommitted changes"
+        else:
+            last = git(root, "log", "--first-parent", "-n", "1", "--format=%H", "HEAD",
+                       "--", SOLVER_PATH)
+            if not last:
+                raise ValueError(f"no commit changed {SOLVER_PATH}/: name a revision "
+                                 f"with --against or ${AGAINST_ENV}")
+            try:
+                commit = git(root, "rev-parse", "--verify", "--quiet", f"{last}^1")
+            except RuntimeError:
+                raise ValueError(f"{last[:12]}, the latest change to {SOLVER_PATH}/, has "
+                                 f"no parent: name a revision with --against") from None
+            why = (f"{last[:12]}^, the solver before its latest change "
+                   f"(\"{git(root, 'log', '-1', '--format=%s', last)}\")")
+        subject = git(root, "log", "-1", "--format=%s", commit)
+    except RuntimeError as exc:
+        raise ValueError(f"cannot resolve the previous version"
+                         f"{f' {asked!r}' if asked else ''}: {exc}") from None
+    return {"commit": commit, "asked": asked, "why": why, "subject": subject}
+
+
+def _pythonpath(first: Path) -> str:
+    rest = os.environ.get("PYTHONPATH")
+    return str(first) + (os.pathsep + rest if rest else "")
+
+
+def section_previous(mode: Mode, procs: Processes, against: str | None) -> dict:
+    """This version against a previous one (``resolve_against``) on the targets' paper
+    lines, in the same run: the previous revision is checked out into a temporary
+    worktree with a numba cache of its own (its first run compiles, and is left out),
+    and the two versions' ``chainrun simulate`` processes alternate."""
+    out: dict = {"cases": [], "runs": mode.previous_runs}
+    try:
+        out.update(resolve_against(against))
+    except ValueError as exc:
+        out["error"] = str(exc)
+        log(f"previous: {exc}")
+        return out
+    tree = procs.scratch / f"previous-{out['commit'][:12]}"
+    log(f"previous: {out['commit'][:12]} ({out['why']}) into {tree}")
+    try:
+        dirty = bool(git(ROOT, "status", "--porcelain", "--", SOLVER_PATH))
+        out["new"] = {"commit": git_commit(), "solver_changes_uncommitted": dirty}
+        git(ROOT, "worktree", "add", "--detach", str(tree), out["commit"])
+        envs = {"new": dict(os.environ, PYTHONPATH=_pythonpath(ROOT)),
+                "old": dict(os.environ, PYTHONPATH=_pythonpath(tree),
+                            NUMBA_CACHE_DIR=str(procs.scratch / "numba-previous"))}
+        warm = config_text("previous-warmup", 50, 1, 1.5, times=[0.0, 10.0])
+        log("  old: its first run, compiling into its own numba cache...")
+        cold = procs.run(warm, env=envs["old"], timeout=900.0, read_velocity=False)
+        again = procs.run(warm, env=envs["old"], timeout=300.0, read_velocity=False)
+        out["old_first_run"] = {"wall": cold.wall, "cpu": cold.cpu, "warm_wall": again.wall,
+                                "error": cold.error or again.error}
+        if cold.error or again.error:
+            out["error"] = f"the previous version does not run: {cold.error or again.error}"
+            log(f"  {out['error']}")
+            return out
+        log(f"  first run {fmt_t(cold.wall)} s (cpu {fmt_t(cold.cpu)} s), then "
+            f"{fmt_t(again.wall)} s")
+        procs.run(warm, env=envs["new"], read_velocity=False)   # this version's cache
+        for label, n, alpha in mode.previous_cases:
+            log(f"previous: {label} N = {n}, K = 1, to the terminal state, "
+                f"{mode.previous_runs} runs of each version, alternating")
+            text = config_text(f"previous-{label.lower()}-{n}", n, 1, alpha)
+            jobs = {v: {"text": text, "env": envs[v], "timeout": 900.0} for v in ("new", "old")}
+            case = {"label": label, "n": n, "alpha": alpha}
+            case.update(alternate(procs, jobs, mode.previous_runs))
+            for v in ("new", "old"):
+                case[v].pop("diagnostics")
+            case["ratio_median"] = _ratio(case["new"], case["old"])
+            case["ratio_min"] = _ratio(case["new"], case["old"], min)
+            out["cases"].append(case)
+    except RuntimeError as exc:                   # git failing
+        out["error"] = str(exc)
+        log(f"  {exc}")
+    finally:
+        if tree.exists():
+            try:
+                git(ROOT, "worktree", "remove", "--force", str(tree))
+            except RuntimeError as exc:
+                log(f"  could not remove the worktree {tree}: {exc}; "
+                    f"`git worktree prune` forgets it once the folder is gone")
+    return out
+
+
 # --- the report ----------------------------------------------------------------------------
+
+
+def _times(walls) -> str:
+    return ", ".join(fmt_t(w) for w in walls) or "-"
+
+
+def _ratio_text(r: float | None) -> str:
+    if r is None:
+        return "-"
+    return f"{r:.2f}" if r < 100 else f"{r:.3g}"
+
+
+def report_general(g: dict) -> list[str]:
+    """The general section's lines of the report."""
+    out = ["General line: the paper's Hertz line (uniform) against a random line (masses "
+           "and stiffnesses uniform in [1, 10), fixed seeds), K = 1, to the terminal state; "
+           f"whole chainrun simulate processes, {g['runs']} runs each, alternating; "
+           "x uniform = median / the uniform line's median; events, steps (accepted), "
+           "rejected steps and the widest window of the first run:"]
+    rows, skips = [], []
+    for p in g["series"]:
+        first = True
+        for line in ("uniform", "random"):
+            r = p.get(line)
+            n = str(p["n"]) if first else ""
+            first = False
+            if r is None:
+                guess = p.get("random_predicted")
+                uni = p["uniform"]["walls"]
+                rows.append([n, line, "skip", "-",
+                             f"~{guess / median(uni):.2g} (pred.)" if guess and uni else "-",
+                             "", "", "", ""])
+                skips.append(f"{line} N = {p['n']}: {p.get('random_skipped')}")
+                continue
+            d = r.get("diagnostics") or {}
+            rows.append([n, line, _times(r["walls"]), fmt_t(median(r["walls"]))
+                         if r["walls"] else "-",
+                         _ratio_text(p.get("ratio")) if line == "random" else "",
+                         str(d.get("events", "-")), str(d.get("steps", "-")),
+                         str(d.get("rejected_steps", "-")), str(d.get("max_window", "-"))])
+            if r["errors"]:
+                skips.append(f"{line} N = {p['n']}: {r['errors'][0]}")
+            elif d and d.get("outcome") != "terminal":
+                skips.append(f"{line} N = {p['n']}: ended {d.get('outcome')}, not terminal")
+    out.append("  " + table(["N", "line", "times s", "median", "x uniform", "events", "steps",
+                             "rejected", "window"], rows, "llrrrrrrr").replace("\n", "\n  "))
+    out += [f"  {s}" for s in skips]
+    v = g["requirement"]
+    head = f"  Requirement random <= {g['limit']:g} x uniform at N = {v['n']}: "
+    if v["ratio"] is None:
+        out.append(head + "not measured")
+    elif v["measured"]:
+        out.append(head + ("MET" if v["met"] else "NOT MET") + f" ({v['ratio']:.3g} x)")
+    else:
+        out.append(head + ("not measured" if v["met"] else "NOT MET by prediction")
+                   + f": the random line was not run, predicted {v['ratio']:.2g} x")
+    u = g.get("units")
+    if u:
+        out.append(f"  Units: the steel line in SI units (diameter {u['si_line']['diameter']:g} m, "
+                   f"{u['si_line']['speed']:g} m/s) against the paper's line, N = {u['n']}, "
+                   "to the terminal state:")
+        for name in ("paper", "si"):
+            r = u[name]
+            out.append(f"    {name:5s} {_times(r['walls'])} s (median "
+                       f"{fmt_t(median(r['walls'])) if r['walls'] else '-'})"
+                       + (f"  [{r['errors'][0]}]" if r["errors"] else ""))
+        same = {None: "not compared", True: "the same", False: "DIFFERENT"}[u["same_work"]]
+        d = u["paper"].get("diagnostics") or {}
+        out.append(f"    si / paper: {_ratio_text(u['ratio'])} x; events and steps {same}"
+                   + (f" ({d['events']} and {d['steps']})" if u["same_work"] else ""))
+    return out
+
+
+def report_previous(p: dict) -> list[str]:
+    """The previous section's lines of the report."""
+    if "commit" not in p:
+        return [f"Previous version: {p.get('error')}"]
+    new = p.get("new") or {}
+    out = [f"Previous version: {p['commit'][:12]} \"{p['subject']}\", chosen as {p['why']}; "
+           f"this version: commit {(new.get('commit') or '?')[:12]}"
+           + (" with uncommitted solver changes" if new.get("solver_changes_uncommitted")
+              else "")]
+    f = p.get("old_first_run")
+    if f and f.get("wall") is not None:
+        out.append(f"  Its first run (a numba cache of its own, empty) took {fmt_t(f['wall'])} s "
+                   f"(cpu {fmt_t(f['cpu'])} s), {fmt_t(f['warm_wall'])} s warm: left out of the "
+                   "times below.")
+    if p.get("error"):
+        out.append(f"  {p['error']}")
+    if p["cases"]:
+        out.append(f"  Whole chainrun simulate processes, K = 1, to the terminal state; "
+                   f"{p['runs']} runs of each version, alternating new, old, new, old, ...:")
+        rows = []
+        for c in p["cases"]:
+            new_w, old_w = c["new"]["walls"], c["old"]["walls"]
+            rows.append([f"{c['label']} {c['n']}",
+                         fmt_t(min(new_w)) if new_w else "-",
+                         fmt_t(median(new_w)) if new_w else "-",
+                         fmt_t(min(old_w)) if old_w else "-",
+                         fmt_t(median(old_w)) if old_w else "-",
+                         _ratio_text(c["ratio_median"]), _ratio_text(c["ratio_min"])])
+        out.append("  " + table(["case", "new min", "new median", "old min", "old median",
+                                 "new/old median", "new/old min"], rows)
+                   .replace("\n", "\n  "))
+        for c in p["cases"]:
+            line = (f"  {c['label']} N = {c['n']}: new {_times(c['new']['walls'])} s; "
+                    f"old {_times(c['old']['walls'])} s")
+            errors = c["new"]["errors"] + c["old"]["errors"]
+            out.append(line + (f"  [{errors[0]}]" if errors else ""))
+    return out
 
 
 def report(res: dict) -> str:
@@ -789,6 +1202,12 @@ def report(res: dict) -> str:
         for r in mem["runs"]:
             out.append(f"  {r['snapshots']:4d} snapshots: {fmt_t(r['maxrss_mb'])} MB, "
                        f"{fmt_t(r['wall'])} s" + (f"  [{r['error']}]" if r["error"] else ""))
+    if res.get("general"):
+        out.append("")
+        out.extend(report_general(res["general"]))
+    if res.get("previous"):
+        out.append("")
+        out.extend(report_previous(res["previous"]))
     if res["notes"]:
         out.append("")
         out.extend(f"Note: {n}" for n in res["notes"])
@@ -817,13 +1236,22 @@ def main(argv=None) -> int:
                              "terminal state, scipy to N = 4000, heyoka and RK4 to N = 10^4, "
                              "memory to the terminal state); hours, not minutes")
     parser.add_argument("--smoke", action="store_true",
-                        help="tiny sizes, to check the harness itself in about a minute")
+                        help="tiny sizes, to check the harness itself in about two minutes")
     parser.add_argument("--only", nargs="+", choices=SECTIONS, default=list(SECTIONS),
                         help="run only these sections")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "bench",
                         help="folder of the JSON and text reports [default: results/bench]")
+    parser.add_argument("--against", metavar="REV", default=None,
+                        help="the previous version the section 'previous' compares with, any "
+                             f"git revision [default: ${AGAINST_ENV} if set, else the solver "
+                             f"before its latest change: HEAD if {SOLVER_PATH}/ has uncommitted "
+                             "changes, otherwise the first parent of the newest commit on "
+                             "HEAD's first-parent history that changed it]")
     args = parser.parse_args(argv)
     mode = Mode.make(args.full, args.smoke)
+    # a TERM unwinds like an interrupt: the running process is killed, the previous
+    # version's worktree and the scratch folder removed
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     started = time.perf_counter()
     now = dt.datetime.now()
     res = {"date": now.isoformat(timespec="seconds"), "full": mode.full, "smoke": args.smoke,
@@ -852,6 +1280,10 @@ def main(argv=None) -> int:
             res["k80"] = section_k80(mode, procs)
         if "memory" in args.only:
             res["memory"] = section_memory(mode, procs)
+        if "general" in args.only:
+            res["general"] = section_general(mode, procs)
+        if "previous" in args.only:
+            res["previous"] = section_previous(mode, procs, args.against)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     res["load_end"] = os.getloadavg()

@@ -121,3 +121,184 @@ def test_git_commit_is_read_without_git(tmp_path):
     _git("checkout", "-q", "--detach", cwd=repo)
     assert run.git_commit(repo) == head  # detached
     assert run.git_commit(tmp_path / "none") is None
+
+
+# --- the general and previous sections: configs, runs' order, verdicts, report ------------
+
+
+def test_general_section_configs_are_the_lines_asked_for():
+    """The random line: masses and stiffnesses in [1, 10) from fixed seeds (the same
+    line in every bench); the steel line: SI units, Hertz, the paper line's events."""
+    (spec,) = parse_experiment(run.config_text("g", 500, 1, 1.5, chain=run.RANDOM_LINE),
+                               "toml").runs()
+    line = spec.line
+    for a in (line.mass, line.stiffness):
+        assert a.min() >= 1.0 and a.max() < 10.0 and a.max() / a.min() > 5
+    (again,) = parse_experiment(run.config_text("g", 500, 1, 1.5, chain=run.RANDOM_LINE),
+                                "toml").runs()
+    assert np.array_equal(again.line.mass, line.mass)
+    assert not np.array_equal(line.mass, line.stiffness)
+    assert spec.t_end is None and line.velocity[0] == 1.0 and not line.velocity[1:].any()
+
+    text = run.config_text("s", 100, 1, None, top={"units": "si"}, chain=run.SI_LINE)
+    (si,) = parse_experiment(text, "toml").runs()
+    assert si.units == "si" and si.line.velocity[0] == 0.5
+    assert np.allclose(si.line.alpha, 1.5) and si.t_end is None
+
+
+class _FakeProcs:
+    """Stands for ``Processes``: records the order of runs, fails when told to."""
+
+    def __init__(self, fail_at=None):
+        self.order, self.fail_at = [], fail_at
+
+    def run(self, text, *, env=None, timeout=None, read_velocity=True,
+            read_diagnostics=False):
+        self.order.append(text)
+        if len(self.order) == self.fail_at:
+            return run.ProcessRun(None, None, None, error="exit status 1: boom")
+        return run.ProcessRun(float(len(self.order)), 1.0, 10.0,
+                              diagnostics={"events": 1} if read_diagnostics else None)
+
+
+def test_alternate_interleaves_the_runs_and_stops_at_a_failure():
+    procs = _FakeProcs()
+    out = run.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
+    assert procs.order == ["A", "B"] * 3
+    assert out["a"]["walls"] == [1.0, 3.0, 5.0] and out["b"]["walls"] == [2.0, 4.0, 6.0]
+    assert run._ratio(out["b"], out["a"]) == pytest.approx(4.0 / 3.0)
+    assert run._ratio(out["b"], out["a"], min) == 2.0
+
+    procs = _FakeProcs(fail_at=4)
+    out = run.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
+    assert procs.order == ["A", "B", "A", "B"]
+    assert out["b"]["errors"] and out["b"]["walls"] == [2.0]
+    assert run._ratio(out["a"], {"walls": []}) is None
+
+
+def _runs(walls, **diag):
+    return {"walls": walls, "cpus": walls, "errors": [], "diagnostics": diag or None}
+
+
+def test_general_verdict_measured_predicted_or_not_at_all():
+    uni = _runs([1.0, 1.2, 1.1])
+    measured = {"n": 10**6, "uniform": uni, "random": _runs([2.0]), "ratio": 2.0 / 1.1}
+    assert run._general_verdict(measured) == {"n": 10**6, "ratio": 2.0 / 1.1,
+                                              "measured": True, "met": True}
+    predicted = {"n": 10**6, "uniform": uni, "ratio": None, "random_predicted": 11.0}
+    v = run._general_verdict(predicted)
+    assert not v["measured"] and v["ratio"] == pytest.approx(10.0) and v["met"] is False
+    assert run._general_verdict({"n": 5, "uniform": uni, "ratio": None})["met"] is None
+
+
+def _general_result():
+    diag = dict(events=299, steps=725, rejected_steps=5, max_window=12, outcome="terminal")
+    rdiag = dict(events=24259, steps=125799, rejected_steps=111800, max_window=220,
+                 outcome="terminal")
+    series = [{"n": 300, "uniform": _runs([0.72, 0.73, 0.71], **diag),
+               "random": _runs([2.27, 2.23, 2.25], **rdiag), "ratio": 2.25 / 0.72},
+              {"n": 10**6, "uniform": _runs([7.4, 7.6, 7.5], **diag),
+               "random_skipped": "predicted solver time 1e+07 s > 60 s (--full for more)",
+               "random_predicted": 7.5e6, "ratio": None}]
+    units = {"n": 10**5, "si_line": run.SI_LINE, "paper": _runs([0.95, 0.97, 0.96], **diag),
+             "si": _runs([0.96, 0.94, 0.98], **diag), "ratio": 1.0, "same_work": True}
+    g = {"random_line": run.RANDOM_LINE, "limit": 2.0, "requirement_n": 10**6, "runs": 3,
+         "series": series, "units": units}
+    g["requirement"] = run._general_verdict(series[-1])
+    return g
+
+
+def _previous_result():
+    new, old = _runs([0.70, 0.72, 0.69]), _runs([0.75, 0.74, 0.76])
+    return {"runs": 3, "commit": "a" * 40, "asked": None, "subject": "Faster heap",
+            "why": "bbbbbbbbbbbb^, the solver before its latest change (\"x\")",
+            "new": {"commit": "c" * 40, "solver_changes_uncommitted": False},
+            "old_first_run": {"wall": 40.7, "cpu": 40.1, "warm_wall": 0.8, "error": None},
+            "cases": [{"label": "Hertz", "n": 10_000, "alpha": 1.5, "new": new, "old": old,
+                       "ratio_median": 0.70 / 0.75, "ratio_min": 0.69 / 0.74}]}
+
+
+def test_report_shows_the_general_and_previous_sections():
+    res = {"machine": {"machine": "x86_64", "cpus": 2, "memory_gb": 24}, "full": False,
+           "date": "2026-11-24T08:00:00", "git_commit": "c" * 40, "load_start": (1.0,),
+           "load_end": (1.0,), "notes": [], "total_time": 1.0, "json": "b.json",
+           "general": _general_result(), "previous": _previous_result()}
+    text = run.report(res)
+    # every time is printed, with the medians and the ratio to the paper's line
+    assert "0.72, 0.73, 0.71" in text and "2.27, 2.23, 2.25" in text
+    assert re.search(r"random\s+2\.27, 2\.23, 2\.25\s+2\.25\s+3\.12\s+24259\s+125799", text)
+    assert "random N = 1000000: predicted solver time" in text
+    assert ("Requirement random <= 2 x uniform at N = 1000000: NOT MET by prediction"
+            in text)
+    assert "si / paper: 1.00 x; events and steps the same (299 and 725)" in text
+    # the previous version: which, why, its compilation left out, min/median, ratios
+    assert 'Previous version: aaaaaaaaaaaa "Faster heap", chosen as bbbbbbbbbbbb^' in text
+    assert "took 40.7 s (cpu 40.1 s), 0.80 s warm: left out" in text
+    assert re.search(r"Hertz 10000\s+0\.69\s+0\.70\s+0\.74\s+0\.75\s+0\.93\s+0\.93", text)
+    assert "Hertz N = 10000: new 0.70, 0.72, 0.69 s; old 0.75, 0.74, 0.76 s" in text
+
+    measured = _general_result()
+    last = measured["series"][-1]
+    last.update(random=_runs([9.0, 9.5, 9.2]), ratio=9.2 / 7.5)
+    measured["requirement"] = run._general_verdict(last)
+    assert any(line.endswith("MET (1.23 x)") and "NOT" not in line
+               for line in run.report_general(measured))
+    assert run.report_previous({"cases": [], "error": "cannot resolve"}) == [
+        "Previous version: cannot resolve"]
+
+
+@pytest.fixture
+def solver_history(tmp_path):
+    """A repository whose solver changed in commits 1 and 2, and docs alone in 3."""
+    if shutil.which("git") is None:
+        pytest.skip("git is not installed")
+    repo = tmp_path / "repo"
+    (repo / "chainrun" / "solver").mkdir(parents=True)
+    env = ["-c", "user.name=t", "-c", "user.email=t@t"]
+    _git("init", "-q", cwd=repo)
+    commits = []
+    for i, path in enumerate(["chainrun/solver/a.py", "chainrun/solver/a.py", "README"]):
+        (repo / path).write_text(str(i))
+        _git("add", path, cwd=repo)
+        _git(*env, "commit", "-q", "-m", f"change {i}", cwd=repo)
+        commits.append(_git("rev-parse", "HEAD", cwd=repo))
+    return repo, commits
+
+
+def test_previous_version_is_the_solver_before_its_latest_change(solver_history):
+    repo, (c0, c1, c2) = solver_history
+    got = run.resolve_against(None, repo, environ={})
+    assert got["commit"] == c0 and got["subject"] == "change 0"
+    assert got["why"].startswith(f"{c1[:12]}^") and "change 1" in got["why"]
+    # named: by the option, else the environment variable
+    assert run.resolve_against("HEAD~1", repo, environ={})["commit"] == c1
+    env = {run.AGAINST_ENV: "HEAD"}
+    assert run.resolve_against(None, repo, environ=env)["commit"] == c2
+    assert run.resolve_against("HEAD~2", repo, environ=env)["commit"] == c0
+    with pytest.raises(ValueError, match="no-such-rev"):
+        run.resolve_against("no-such-rev", repo, environ={})
+    # uncommitted solver changes: this version is the work tree, the previous one HEAD
+    (repo / "chainrun" / "solver" / "a.py").write_text("new")
+    got = run.resolve_against(None, repo, environ={})
+    assert got["commit"] == c2 and "uncommitted" in got["why"]
+
+
+def test_previous_version_needs_a_parent(tmp_path):
+    if shutil.which("git") is None:
+        pytest.skip("git is not installed")
+    repo = tmp_path / "repo"
+    (repo / "chainrun" / "solver").mkdir(parents=True)
+    _git("init", "-q", cwd=repo)
+    (repo / "chainrun" / "solver" / "a.py").write_text("0")
+    _git("add", ".", cwd=repo)
+    _git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "0", cwd=repo)
+    with pytest.raises(ValueError, match="no parent"):
+        run.resolve_against(None, repo, environ={})
+    other = tmp_path / "other"                               # no solver history at all
+    other.mkdir()
+    _git("init", "-q", cwd=other)
+    (other / "README").write_text("x")
+    _git("add", ".", cwd=other)
+    _git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "0", cwd=other)
+    with pytest.raises(ValueError, match="no commit changed"):
+        run.resolve_against(None, other, environ={})
