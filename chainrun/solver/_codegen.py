@@ -132,11 +132,11 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
     packs the lanes into vector instructions: a loop over the lanes would load and
     store its partial sums at every j, and sums written out for every order would be a
     function of thousands of lines, slow to compile. ``mixed``: each lane has its own
-    exponent (AL), and so its own weights.
+    exponent (AL), and so its own weights. ``unit``: every mass 1 (no division).
     """
     lanes = range(tile)
     if mixed:
-        name, args = "_series_orders_mixed", "TX, W, IM, AL, nc, m"
+        name, args = "_series_orders_mixed", "TX, W, IM, AL, nc, m, unit"
         doc = "Orders 1 and up of the force series, each lane its own alpha (see _taylor)."
         head = [f"            a{i} = AL[t * SERIES_TILE + {i}]" for i in lanes]
         head += [f"            b{i} = a{i} + 1.0" for i in lanes]
@@ -146,7 +146,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         def term(acc, i):
             return f"                {acc}{i} += (b{i} * jk - 1.0) * W[c + {i}] * W[f + {i}]"
     else:
-        name, args = "_series_orders", "TX, W, IM, nc, m, alpha"
+        name, args = "_series_orders", "TX, W, IM, nc, m, alpha, unit"
         doc = "Orders 1 and up of the force series of every contact lane (see _taylor)."
         head = []
         first = [f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes]
@@ -185,10 +185,16 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         f"            f = o + {2 * pt} * SERIES_TILE",
         *[f"            W[c + {i}] = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
         "        s = SERIES_SCALE[k]",
-        "        for p in range(m):",
-        "            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
-        "            fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
-        "            TX[k + 2, p] = (fl - fr) * s * IM[p]",
+        "        if unit:",
+        "            for p in range(m):",
+        "                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
+        "                fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
+        "                TX[k + 2, p] = (fl - fr) * s",
+        "        else:",
+        "            for p in range(m):",
+        "                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
+        "                fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
+        "                TX[k + 2, p] = (fl - fr) * s * IM[p]",
         "    # the compressions' last two orders, for the bounds (_series_bounds)",
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",

@@ -185,7 +185,7 @@ def _dense_rows(S, p):
 
 
 @kernel(fastmath={"contract"})
-def _series_orders(TX, W, IM, nc, m, alpha):
+def _series_orders(TX, W, IM, nc, m, alpha, unit):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
@@ -288,10 +288,16 @@ def _series_orders(TX, W, IM, nc, m, alpha):
             W[c + 14] = (e14 + d14) * W[f + 14]
             W[c + 15] = (e15 + d15) * W[f + 15]
         s = SERIES_SCALE[k]
-        for p in range(m):
-            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-            fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-            TX[k + 2, p] = (fl - fr) * s * IM[p]
+        if unit:
+            for p in range(m):
+                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+                TX[k + 2, p] = (fl - fr) * s
+        else:
+            for p in range(m):
+                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+                TX[k + 2, p] = (fl - fr) * s * IM[p]
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
@@ -299,7 +305,7 @@ def _series_orders(TX, W, IM, nc, m, alpha):
 
 
 @kernel(fastmath={"contract"})
-def _series_orders_mixed(TX, W, IM, AL, nc, m):
+def _series_orders_mixed(TX, W, IM, AL, nc, m, unit):
     """Orders 1 and up of the force series, each lane its own alpha (see _taylor)."""
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
     f0 = 25  # row of f_0
@@ -433,10 +439,16 @@ def _series_orders_mixed(TX, W, IM, AL, nc, m):
             W[c + 14] = (e14 + d14) * W[f + 14]
             W[c + 15] = (e15 + d15) * W[f + 15]
         s = SERIES_SCALE[k]
-        for p in range(m):
-            fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-            fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-            TX[k + 2, p] = (fl - fr) * s * IM[p]
+        if unit:
+            for p in range(m):
+                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+                TX[k + 2, p] = (fl - fr) * s
+        else:
+            for p in range(m):
+                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
+                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
+                TX[k + 2, p] = (fl - fr) * s * IM[p]
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]

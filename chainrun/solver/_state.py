@@ -198,6 +198,8 @@ def _flight(S, b, t):
     """(displacement since bt, velocity) of free ball b at t: a parabola under its
     constant acceleration (a straight line without one, to the same bits)."""
     dt = t - S.bt[b]
+    if S.ints[I_FORCED] == 0:
+        return dt * S.bv[b], S.bv[b]
     g = S.bp[B_ACC, b]
     return dt * (S.bv[b] + 0.5 * g * dt), S.bv[b] + g * dt
 

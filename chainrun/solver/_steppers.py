@@ -31,7 +31,7 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV,
-    I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
+    I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
     TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
 )
 
@@ -84,10 +84,11 @@ def _taylor(S):
         W[_tw(p, 0)] = c0
         W[_tw(p, f0)] = _force(c0, mode, AL[p] if mode == MODE_MIXED else alpha) * MK[p]
         W[_tw(p, 2 * PT)] = 1.0 / c0 if MK[p] != 0.0 and mode != MODE_LINEAR else 0.0
+    unit = S.ints[I_UNIT] == 1
     for p in range(m):
         fl = W[_tw(p - 1, f0)] if p > 0 else 0.0
         fr = W[_tw(p, f0)] if p < nc else 0.0
-        TX[2, p] = 0.5 * ((fl - fr) * IM[p] + GA[p])
+        TX[2, p] = 0.5 * (fl - fr) if unit else 0.5 * ((fl - fr) * IM[p] + GA[p])
     if mode == MODE_LINEAR:
         for k in range(1, PT + 1):
             for p in range(nc):
@@ -99,9 +100,9 @@ def _taylor(S):
                     fr = W[_tw(p, k)] * MK[p] if p < nc else 0.0
                     TX[k + 2, p] = (fl - fr) * s * IM[p]
     elif mode == MODE_MIXED:
-        _series_orders_mixed(TX, W, IM, AL, nc, m)
+        _series_orders_mixed(TX, W, IM, AL, nc, m, unit)
     else:
-        _series_orders(TX, W, IM, nc, m, alpha)
+        _series_orders(TX, W, IM, nc, m, alpha, unit)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
