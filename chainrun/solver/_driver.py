@@ -21,7 +21,7 @@ from chainrun.solver import (
     velocity_floor,
 )
 from chainrun.solver import _jit, _loop, _state
-from chainrun.solver.model import Line
+from chainrun.solver.model import Line, _alike
 from chainrun.solver.physics import (
     contact_forces, kinetic_energy, line_kinetic_energy, line_momentum,
     line_potential_energy, momentum, potential_energy,
@@ -103,37 +103,47 @@ class _Prepared:
 
     def __init__(self, line: Line):
         self.line = line
-        sc = self.scales = line.scales()
+        kappa, alpha, gap = line.contact_params()
+        sc = self.scales = line.scales((kappa, alpha, gap))
         n = self.n = line.n
         self.lw = 1 if line.left is not None else 0
         self.rw = 1 if line.right is not None else 0
         nb = self.nb = n + self.lw + self.rw
-        balls = slice(self.lw, self.lw + n)
-        kappa, alpha, gap = line.contact_params()
+        balls = self.balls = slice(self.lw, self.lw + n)
         self.alpha = alpha
-        # kappa L^alpha is a force, in units of M L / T^2
-        self.kappa = kappa * (sc.length ** (alpha - 1.0) * sc.time * sc.time / sc.mass)
+        # kappa L^alpha is a force, in units of M L / T^2; a long line of one kind is
+        # converted with one scalar factor (and no copy where that is 1)
+        if _alike(alpha):
+            factor = (sc.length ** (float(alpha[0]) - 1.0) * sc.time * sc.time / sc.mass
+                      if alpha.size else 1.0)
+            self.kappa = kappa if factor == 1.0 else kappa * factor
+        else:
+            self.kappa = kappa * (sc.length ** (alpha - 1.0) * sc.time * sc.time / sc.mass)
         self.mass = np.zeros(nb)
-        self.mass[balls] = line.mass / sc.mass
+        self.mass[balls] = line.mass if sc.mass == 1.0 else line.mass / sc.mass
         self.im = np.zeros(nb)
-        self.im[balls] = 1.0 / self.mass[balls]
-        self.acc = np.zeros(nb)
-        self.acc[balls] = line.force / sc.force / self.mass[balls]
+        np.divide(1.0, self.mass[balls], out=self.im[balls])
+        self.acc = np.zeros(nb)  # (untouched pages cost nothing where there is no force)
+        self.forced = bool(np.any(line.force))
+        if self.forced:
+            self.acc[balls] = line.force / sc.force / self.mass[balls]
         self.offset = np.zeros(nb)
-        if nb > 1:
+        gapped = bool(np.any(gap))
+        if gapped:
             self.offset[1:] = np.cumsum(gap / sc.length)
-        self.y0 = self.offset.copy()
-        self.y0[balls] += line.position / sc.length
+        self.y0 = self.offset.copy() if gapped else np.zeros(nb)
+        self.flat = not gapped and not np.any(line.position) and not self.forced
+        if np.any(line.position):
+            self.y0[balls] += line.position / sc.length
         self.v0 = np.zeros(nb)
-        self.v0[balls] = line.velocity / sc.velocity
-        self.balls = balls
-        self.unit = bool(np.all(self.mass == 1.0) and not np.any(self.acc))
+        self.v0[balls] = line.velocity if sc.velocity == 1.0 else line.velocity / sc.velocity
+        self.unit = not self.forced and nb == n and bool(np.all(self.mass == 1.0))
         a = alpha
-        if a.size == 0 or np.all(a == 1.0):
+        if a.size == 0 or (_alike(a) and a[0] == 1.0):
             self.mode, self.alpha0 = _state.MODE_LINEAR, 1.0
-        elif np.all(a == 1.5):
+        elif _alike(a) and a[0] == 1.5:
             self.mode, self.alpha0 = _state.MODE_HERTZ, 1.5
-        elif np.all(a == a[0]):
+        elif _alike(a):
             self.mode, self.alpha0 = _state.MODE_POWER, float(a[0])
         else:
             self.mode, self.alpha0 = _state.MODE_MIXED, math.nan
@@ -170,29 +180,36 @@ def _initial_contacts(P: _Prepared, cp: np.ndarray, floor: float):
     cluster. Touching at rest relative to each other: dormant. Apart, or touching and
     parting: open, and, if the pair closes, its collision is predicted.
     """
-    y, v, g = P.y0, P.v0, P.acc
-    c = y[:-1] - y[1:]
+    y, v = P.y0, P.v0
     w = v[:-1] - v[1:]
-    a = g[:-1] - g[1:]
-    touching = c == 0.0
-    active = (c > 0.0) | (touching & ((w > 0.0) | ((w == 0.0) & (a > 0.0))))
-    dormant = touching & (w == 0.0) & (a == 0.0)
-    cst = np.full(c.size, _state.OPEN, np.int8)
-    cst[dormant] = _state.DORMANT
+    cst = np.full(w.size, _state.DORMANT, np.int8)
+    if P.flat:  # every contact touching, no force: only the velocities decide
+        active = w > 0.0
+        cst[w < 0.0] = _state.OPEN
+    else:
+        c = y[:-1] - y[1:]
+        a = P.acc[:-1] - P.acc[1:]
+        touching = c == 0.0
+        active = (c > 0.0) | (touching & ((w > 0.0) | ((w == 0.0) & (a > 0.0))))
+        cst[~active & ~(touching & (w == 0.0) & (a == 0.0))] = _state.OPEN
     cst[active] = _state.ACTIVE
-    rounding = 64.0 * _state.EPS * np.maximum(1.0, np.abs(y[:-1]) + np.abs(y[1:]))
-    lvl = np.where(cst == _state.OPEN, np.maximum(c, 0.0) + np.maximum(cp[_state.C_EPS],
-                                                                       rounding), 0.0)
-    # clusters: maximal runs of active contacts
-    edges = np.diff(np.concatenate([[0], active.astype(np.int8), [0]]))
-    starts = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1)  # one past the run's last contact: its last ball
     opened = np.flatnonzero(cst == _state.OPEN)
+    lvl = np.zeros(w.size)
+    if opened.size:
+        yl, yr = y[opened], y[opened + 1]
+        rounding = 64.0 * _state.EPS * np.maximum(1.0, np.abs(yl) + np.abs(yr))
+        lvl[opened] = np.maximum(yl - yr, 0.0) + np.maximum(cp[_state.C_EPS][opened],
+                                                           rounding)
+    # clusters: maximal runs of active contacts
+    edges = np.flatnonzero(np.diff(active.view(np.int8), prepend=0, append=0))
+    starts, ends = edges[0::2], edges[1::2]  # ends: one past the run's last contact
+    if not opened.size:
+        return cst, lvl, starts, ends, opened
     free = np.ones(P.nb, bool)
     for lo, hi in zip(starts, ends):
         free[lo:hi + 1] = False
     near = np.unique(np.concatenate([opened, opened + 1]))
-    return cst, lvl, starts, ends, near[free[near]] if near.size else near
+    return cst, lvl, starts, ends, near[free[near]]
 
 
 def _level(force, kappa, alpha):
@@ -256,7 +273,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     fs[_state.F_ALPHA] = P.alpha0
     ints[_state.I_MODE] = P.mode
     ints[_state.I_UNIT] = 1 if P.unit else 0
-    ints[_state.I_FORCED] = 1 if np.any(P.acc) else 0
+    ints[_state.I_FORCED] = 1 if P.forced else 0
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),

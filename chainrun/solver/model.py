@@ -23,6 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 
+def _alike(a: np.ndarray) -> bool:
+    """Whether every entry of ``a`` is the same (or there is none)."""
+    return a.size == 0 or bool(a[0] == a[-1] and np.all(a == a[0]))
+
+
 @dataclass(frozen=True)
 class Wall:
     """A flat wall of infinite mass at rest, touching the end ball across ``gap``."""
@@ -68,8 +73,8 @@ class Scales:
 def _per(name: str, value, size: int) -> np.ndarray:
     """``value`` (a scalar or a sequence of ``size``) as a float array of ``size``."""
     a = np.asarray(value, dtype=float)
-    if a.ndim == 0:
-        return np.full(size, float(a))
+    if a.ndim == 0:  # one value for all: a read-only view, no memory per ball
+        return np.broadcast_to(a, (size,))
     a = a.reshape(-1)
     if a.size != size:
         raise ValueError(f"{name} must be a number or a list of {size} numbers, "
@@ -191,6 +196,8 @@ class Line:
     def contact_params(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(stiffness, alpha, gap) of every contact, the walls' included: the left
         wall's first, the right wall's last."""
+        if self.left is None and self.right is None:
+            return self.stiffness, self.alpha, self.gap
         ks, als, gs = [self.stiffness], [self.alpha], [self.gap]
         if self.left is not None:
             ks.insert(0, [self.left.stiffness])
@@ -203,23 +210,27 @@ class Line:
         return (np.concatenate(ks).astype(float), np.concatenate(als).astype(float),
                 np.concatenate(gs).astype(float))
 
-    def scales(self) -> Scales:
+    def scales(self, params=None) -> Scales:
         """Units in which this line's typical mass, stiffness and speed are 1.
 
         Mass M: the median mass; stiffness K and exponent a: the median contact's
-        (walls included); velocity V: the largest initial speed, or, for a line at
+        (walls included; ``params``: ``contact_params()``, if at hand); velocity V: the largest initial speed, or, for a line at
         rest, the speed a typical force (external, or of the largest overlap) gives
         over its static compression. Then the time ``T = (M V^(1-a) / K)^(1/(a+1))``
         and length ``V T`` make the force law ``K x^a`` balance ``M x''``: the paper's
         scales (its section 2), which are all 1 for its own line.
         """
-        kappa, alpha, gap = self.contact_params()
-        mass = float(np.median(self.mass))
+        kappa, alpha, gap = self.contact_params() if params is None else params
+        m = self.mass
+        mass = float(m[0]) if _alike(m) else float(np.median(m))
         if kappa.size == 0:  # one ball, no wall: nothing to balance
             v = float(np.max(np.abs(self.velocity)))
             return Scales(mass, v if v > 0 else 1.0, 1.0)
-        i = int(np.argsort(kappa, kind="stable")[kappa.size // 2])
-        k0, a0 = float(kappa[i]), float(alpha[i])
+        if _alike(kappa) and _alike(alpha):
+            k0, a0 = float(kappa[0]), float(alpha[0])
+        else:
+            i = int(np.argsort(kappa, kind="stable")[kappa.size // 2])
+            k0, a0 = float(kappa[i]), float(alpha[i])
         speed = float(np.max(np.abs(self.velocity)))
         if speed == 0.0:
             # a line at rest moves only under its forces or overlaps: their static
