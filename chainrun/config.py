@@ -976,6 +976,29 @@ def _label(overrides: Mapping[str, Any], sep: str = ", ") -> str:
     return sep.join(f"{_short(key)}={value}" for key, value in overrides.items())
 
 
+#: Longest run id, well inside a file name's 255 bytes with its suffixes.
+MAX_RUN_ID = 200
+
+
+def _run_id(overrides: Mapping[str, Any]) -> str:
+    """The run's name and file name: ``"n=100_k=3"``, or ``"run"`` without a sweep.
+
+    An id longer than MAX_RUN_ID (a sweep over many keys) keeps the pairs that fit and
+    ends with ``hash=`` and 16 hex digits of the whole id, which keeps it unique.
+    """
+    full = _label(overrides, "_") or "run"
+    if len(full) <= MAX_RUN_ID:
+        return full
+    tail = "hash=" + hashlib.sha256(full.encode()).hexdigest()[:16]
+    kept = ""
+    for key, value in overrides.items():
+        pair = f"{_short(key)}={value}"
+        if len(kept) + len(pair) + 1 + len(tail) + 1 > MAX_RUN_ID:
+            break
+        kept += pair + "_"
+    return kept + tail
+
+
 def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
     """Set ``data["chain"]["k"]`` for ``"chain.k"`` (and ``data["walls"]["right"]["gap"]``
     for ``"walls.right.gap"``), creating missing tables."""
@@ -1169,7 +1192,7 @@ class Experiment(BaseModel):
             specs.append(
                 RunSpec(
                     experiment=self.name,
-                    run_id=_label(overrides, "_") or "run",
+                    run_id=_run_id(overrides),
                     n=chain.n,
                     k=k,
                     alpha=alpha,

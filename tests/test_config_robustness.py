@@ -328,3 +328,34 @@ def test_a_byte_order_mark_is_dropped(tmp_path):
     path.write_bytes(b"\xef\xbb\xbf" + CHAIN.encode())
     exp = load_experiment(path)
     assert exp.name == "x" and exp.source_text == CHAIN
+
+
+def test_a_long_run_id_is_cut_with_a_hash_of_the_whole():
+    # A sweep over many keys with long values: every id fits MAX_RUN_ID, ends with a
+    # hash of the full id, and the ids stay distinct.
+    from chainrun.config import MAX_RUN_ID
+
+    text = """
+name = "long"
+[chain]
+n = 4
+k = 1
+alpha = 1.5
+[solver]
+t_end = 10.0
+[sweep]
+"chain.mass" = [1.0000000000000002, 2.0000000000000004]
+"chain.stiffness" = [1.5381766297101102e-104, 3.5381766297101102e-104]
+"chain.gap" = [9.64066001723686e-124]
+"chain.force" = [-3.53603293454901e-67]
+"chain.speed" = [1.2919326237966292e+46]
+"walls.right.stiffness" = [2.0000000000000004e-100]
+"walls.right.gap" = [1.0000000000000002e-100]
+"solver.rtol" = [1.0000000000000002e-12]
+"""
+    specs = parse_experiment(text, "toml").runs()
+    ids = [s.run_id for s in specs]
+    assert len(set(ids)) == len(ids) == 4
+    for run_id in ids:
+        assert len(run_id) <= MAX_RUN_ID and RUN_ID.fullmatch(run_id), run_id
+        assert re.search(r"_hash=[0-9a-f]{16}$", run_id), run_id
