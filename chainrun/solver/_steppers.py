@@ -98,7 +98,7 @@ def _taylor(S):
                 for p in range(m):
                     fl = W[_tw(p - 1, k)] * MK[p - 1] if p > 0 else 0.0
                     fr = W[_tw(p, k)] * MK[p] if p < nc else 0.0
-                    TX[k + 2, p] = (fl - fr) * s * IM[p]
+                    TX[k + 2, p] = (fl - fr) * s if unit else (fl - fr) * s * IM[p]
     elif mode == MODE_MIXED:
         _series_orders_mixed(TX, W, IM, AL, nc, m, unit)
     else:
