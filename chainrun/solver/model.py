@@ -4,8 +4,12 @@ Balls i = 1..N have masses ``m_i``, displacements ``x_i(t)`` from their referenc
 positions (``x_i(0)`` is ``position``, 0 unless the line starts precompressed),
 velocities ``v_i(0)`` and constant external forces ``f_i``. Contact j joins balls j
 and j + 1; its compression is ``delta_j = x_j - x_{j+1} - g_j`` (``g_j > 0`` a gap,
-``< 0`` an initial overlap) and its force ``kappa_j (delta_j)_+^alpha_j`` never
-pulls. A wall is a contact with a body of infinite mass at rest: on the right
+``< 0`` an initial overlap) and its force
+
+    F_j = max(0, kappa_j delta_j^alpha_j + eta_j delta_j^beta_j d(delta_j)/dt)
+
+while ``delta_j > 0`` never pulls: an elastic part and a damping part (``eta_j`` the
+damping, ``beta_j`` its exponent; ``eta_j = 0``, the default, is elastic). A wall is a contact with a body of infinite mass at rest: on the right
 ``delta_R = x_N - g_R``, on the left ``delta_L = -x_1 - g_L``.
 
     m_i x_i'' = F_{i-1} - F_i + f_i
@@ -35,8 +39,14 @@ class Wall:
     stiffness: float
     alpha: float = 1.5
     gap: float = 0.0
+    damping: float = 0.0
+    damping_exponent: float = 0.0
 
     def __post_init__(self):
+        for name in ("damping", "damping_exponent"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"wall {name} must be a finite number >= 0, got {value!r}")
         for name, value, low in (("stiffness", self.stiffness, 0.0),
                                  ("alpha", self.alpha, 1.0)):
             if not (math.isfinite(value) and (value > low if name == "stiffness"
@@ -97,7 +107,8 @@ class Line:
     """A line of N balls (see the module's docstring); build it with ``Line.make``.
 
     Arrays are per ball (``mass``, ``velocity``, ``force``, ``position``, shape (N,))
-    or per contact (``stiffness``, ``alpha``, ``gap``, shape (N-1,)).
+    or per contact (``stiffness``, ``alpha``, ``gap``, ``damping``,
+    ``damping_exponent``, shape (N-1,)).
     """
 
     mass: np.ndarray
@@ -109,6 +120,8 @@ class Line:
     position: np.ndarray
     left: Wall | None = None
     right: Wall | None = None
+    damping: np.ndarray | None = None
+    damping_exponent: np.ndarray | None = None
 
     def __post_init__(self):
         n = self.mass.shape[0]
@@ -118,22 +131,29 @@ class Line:
             a = getattr(self, name)
             if a.shape != (n,):
                 raise ValueError(f"{name} must have one value per ball ({n})")
-        for name in ("stiffness", "alpha", "gap"):
+        for name in ("damping", "damping_exponent"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.broadcast_to(0.0, (n - 1,)))
+        for name in ("stiffness", "alpha", "gap", "damping", "damping_exponent"):
             a = getattr(self, name)
             if a.shape != (n - 1,):
                 raise ValueError(f"{name} must have one value per contact ({n - 1})")
         _check("mass", self.mass, 0.0)
         _check("stiffness", self.stiffness, 0.0)
         _check("alpha", self.alpha, 1.0, strict=False)
+        _check("damping", self.damping, 0.0, strict=False)
+        _check("damping_exponent", self.damping_exponent, 0.0, strict=False)
         for name in ("gap", "velocity", "force", "position"):
             _check(name, getattr(self, name))
-        for name in ("mass", "stiffness", "alpha", "gap", "velocity", "force", "position"):
+        for name in ("mass", "stiffness", "alpha", "gap", "velocity", "force", "position",
+                     "damping", "damping_exponent"):
             getattr(self, name).setflags(write=False)
 
     @classmethod
     def make(cls, n: int, *, mass=1.0, stiffness=1.0, alpha=1.5, gap=0.0,
              velocity=None, k: int | None = None, speed: float = 1.0, force=0.0,
-             position=0.0, left: Wall | None = None, right: Wall | None = None) -> Line:
+             position=0.0, damping=0.0, damping_exponent=0.0,
+             left: Wall | None = None, right: Wall | None = None) -> Line:
         """A line from scalars (every ball or contact alike) or sequences.
 
         The initial velocities are ``velocity`` (one per ball), or the first ``k``
@@ -160,6 +180,8 @@ class Line:
             velocity=v,
             force=_per("force", force, n),
             position=_per("position", position, n),
+            damping=_per("damping", damping, n - 1),
+            damping_exponent=_per("damping_exponent", damping_exponent, n - 1),
             left=left, right=right,
         )
 
@@ -190,8 +212,27 @@ class Line:
             np.all(self.mass == 1.0) and np.all(self.stiffness == 1.0)
             and np.all(self.alpha == self.alpha[:1]) and not np.any(self.gap)
             and not np.any(self.force) and not np.any(self.position)
+            and not self.is_damped
             and np.all((self.velocity == 0.0) | (self.velocity == 1.0))
             and self.left is None and self.right is None)
+
+    @property
+    def is_damped(self) -> bool:
+        """Whether any contact, or a wall, has damping."""
+        return bool(np.any(self.damping != 0.0)) or any(
+            w is not None and w.damping != 0.0 for w in (self.left, self.right))
+
+    def damping_params(self) -> tuple[np.ndarray, np.ndarray]:
+        """(damping, damping_exponent) of every contact, the walls' included, in the
+        order of ``contact_params``."""
+        etas, betas = [self.damping], [self.damping_exponent]
+        if self.left is not None:
+            etas.insert(0, [self.left.damping])
+            betas.insert(0, [self.left.damping_exponent])
+        if self.right is not None:
+            etas.append([self.right.damping])
+            betas.append([self.right.damping_exponent])
+        return (np.concatenate(etas).astype(float), np.concatenate(betas).astype(float))
 
     def contact_params(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(stiffness, alpha, gap) of every contact, the walls' included: the left
@@ -302,4 +343,5 @@ def precompress(line: Line, load: float) -> Line:
     return Line(mass=line.mass.copy(), stiffness=line.stiffness.copy(),
                 alpha=line.alpha.copy(), gap=line.gap.copy(),
                 velocity=line.velocity.copy(), force=force, position=x,
+                damping=line.damping.copy(), damping_exponent=line.damping_exponent.copy(),
                 left=line.left, right=line.right)
