@@ -68,13 +68,18 @@ class EventKind(enum.IntEnum):
     zero crossings of the compression; ``RELEASE`` and ``ENGAGE`` are the noise-floor
     rules (see ``velocity_floor``): a contact whose compression, rate and load are all
     below the floor is released, and a released contact re-engages when pressed beyond
-    the floor's compression.
+    the floor's compression. ``UNLOAD`` and ``RELOAD`` are a damped contact's: its force
+    reaches 0 while it is still compressed (the collision ends there, and the force is
+    held at 0 until the compression is gone) or rises from 0 again before (a third ball
+    pushes).
     """
 
+    UNLOAD = -3
     RELEASE = -2
     OPEN = -1
     CLOSE = 1
     ENGAGE = 2
+    RELOAD = 3
 
 
 class Outcome(enum.Enum):
@@ -162,6 +167,15 @@ class Solution:
         The line that was run. Every result is in its units; ``n``, ``k`` and
         ``alpha`` are its number of balls, of balls moving at t = 0 and its contacts'
         exponent (NaN if they differ).
+    dissipated : ndarray, shape (T,)
+        The energy dissipated by the damping by each snapshot time (0 on an elastic
+        line).
+    dissipated_energy : float
+        The energy dissipated by ``end_time``.
+    contact_dissipation : ndarray, shape (N-1,)
+        The energy each contact dissipated by ``end_time``.
+    wall_dissipation : ndarray, shape (2,)
+        The same for the left and the right wall (0 where there is none).
     """
 
     n: int
@@ -188,6 +202,11 @@ class Solution:
     sensor_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)),
                                      repr=False)
     line: Line | None = field(default=None, repr=False)
+    dissipated: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    dissipated_energy: float = 0.0
+    contact_dissipation: np.ndarray = field(default_factory=lambda: np.zeros(0),
+                                            repr=False)
+    wall_dissipation: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a

@@ -41,12 +41,32 @@ def _combo(coefs, rows: str, scale: str, index: str = "p") -> str:
     return f"{scale} * (" + " + ".join(terms) + ")" if terms else "0.0"
 
 
-def _force_pass(x: str, s: int) -> list[str]:
-    """Accelerations at positions x into KV[s], across the window (_accelerations)."""
-    return [f"    _accelerations({x}, F, MK, WP, KV[{s}], m, mode, alpha, unit)"]
+def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float = 0.0
+                ) -> list[str]:
+    """Accelerations at positions x into KV[s], across the window (_accelerations).
+
+    On a damped line the forces depend on the velocities too: the stage's velocities
+    (``v``, or V0 + h vcoefs @ KV into VS) and, where ``weight`` (a weight of the
+    step's quadrature) is not 0, the lanes' dissipated power into DS.
+    """
+    if v is None:
+        v = "VS"
+        stage_v = ["        for p in range(m):",
+                   f"            VS[p] = V0[p] + {_combo(vcoefs, 'KV', 'h')}"]
+    else:
+        stage_v = []
+    wgt = f"h * {float(weight)!r}" if weight != 0.0 else "0.0"
+    return [
+        "    if damped:",
+        *stage_v,
+        f"        _damped_accelerations({x}, {v}, F, MK, WP, DS, {wgt}, KV[{s}], m, mode, alpha)",
+        "    else:",
+        f"        _accelerations({x}, F, MK, WP, KV[{s}], m, mode, alpha, unit)",
+    ]
 
 
-def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
+def _stage_pass(out_x: str, s: int, node: float, coefs, vcoefs, weight: float = 0.0
+                ) -> list[str]:
     """Stage s in Nystrom form: positions into out_x, accelerations into KV[s]."""
     drift = f"{float(node)!r} * V0[p]"
     if np.any(coefs != 0.0):
@@ -54,7 +74,7 @@ def _stage_pass(out_x: str, s: int, node: float, coefs) -> list[str]:
     return [
         "    for p in range(m):",
         f"        {out_x}[p] = X0[p] + h * ({drift})",
-        *_force_pass(out_x, s),
+        *_force_pass(out_x, s, vcoefs=vcoefs, weight=weight),
     ]
 
 
@@ -78,7 +98,9 @@ _PROLOGUE = [
     "    mode = S.ints[I_MODE]",
     "    alpha = S.fs[F_ALPHA]",
     "    unit = S.ints[I_UNIT] == 1",
+    "    damped = S.ints[I_DAMPED] == 1",
     "    F, MK, WP = S.FS, S.TR, S.WP",
+    "    VS, DS = S.KV[KV_VS], S.KV[KV_DS]",
 ]
 
 
@@ -257,11 +279,14 @@ _HEADER = [
     "",
     "import numpy as np",
     "",
-    "from chainrun.solver._forces import _accelerations, _forces",
+    "from chainrun.solver._forces import (",
+    "    _accelerations, _damped_accelerations, _damped_forces, _forces,",
+    ")",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
-    "    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, I_UNIT, J_OVER_K, LO_ROW,",
-    "    SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,",
+    "    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_DAMPED, I_M, I_MODE, I_UNIT, J_OVER_K, KV_DS,",
+    "    KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,",
+    "    _find_cluster, _tw,",
     ")",
 ]
 
@@ -280,22 +305,27 @@ def generate() -> str:
         "def _stages(S, h):",
         '    """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.',
         "",
-        "    DOP853 applied to y = (x, v), y' = (v, a(x)), written in Nystrom form: the",
-        "    stage velocities are eliminated, KV[s] holds the stage accelerations and",
-        "    KV[12] those at the step's end.",
+        "    DOP853 applied to y = (x, v), y' = (v, a(x, v)), written in Nystrom form:",
+        "    KV[s] holds the stage accelerations and KV[12] those at the step's end. The",
+        "    stage velocities are needed only on a damped line (VS), where the lanes'",
+        "    dissipated power is summed with the step's weights into DS.",
         '    """',
         *_PROLOGUE,
         "    KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V",
         "    for p in range(m):",
         "        KV[0, p] = A0[p]",
+        "    if damped:",
+        "        for p in range(m):",
+        "            DS[p] = 0.0",
+        f"        _damped_forces(X0, V0, F, MK, WP, DS, h * {float(B[0])!r}, m, mode, alpha)",
     ]
     for s in range(1, ns):
-        lines += _stage_pass("X", s, C[s], AA[s, :s])
+        lines += _stage_pass("X", s, C[s], AA[s, :s], A[s, :s], B[s])
     lines += [
         "    for p in range(m):",
         f"        X[p] = X0[p] + h * (V0[p] + {_combo(AA[ns, :ns], 'KV', 'h')})",
         f"        V[p] = V0[p] + {_combo(B, 'KV', 'h')}",
-        *_force_pass("X", ns),
+        *_force_pass("X", ns, v="V"),
     ]
     e5x, e3x = _nystrom(dop.E5), _nystrom(dop.E3)
     lines += [
@@ -341,7 +371,7 @@ def generate() -> str:
         "    KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS",
     ]
     for s in range(ns + 1, nse):
-        lines += _stage_pass("Xs", s, C[s], AA[s, :s])
+        lines += _stage_pass("Xs", s, C[s], AA[s, :s], A[s, :s])
     lines += [
         "",
         "",
@@ -351,7 +381,8 @@ def generate() -> str:
         "",
         "    Each stage's accelerations at a ball need its positions one ball further each",
         "    way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is",
-        "    cut at the ends of p's cluster, where its forces stop.",
+        "    cut at the ends of p's cluster, where its forces stop. (Not on a damped line,",
+        "    whose forces need the velocities too: _dense_at builds the whole window's.)",
         '    """',
         "    mode = S.ints[I_MODE]",
         "    alpha = S.fs[F_ALPHA]",

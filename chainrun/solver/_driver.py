@@ -137,7 +137,13 @@ class _Prepared:
             self.y0[balls] += line.position / sc.length
         self.v0 = np.zeros(nb)
         self.v0[balls] = line.velocity if sc.velocity == 1.0 else line.velocity / sc.velocity
-        self.unit = not self.forced and nb == n and bool(np.all(self.mass == 1.0))
+        # damping eta makes eta |c|^beta w a force, in units of M L / T^2
+        self.damped = line.is_damped
+        if self.damped:
+            eta, self.beta = line.damping_params()
+            self.eta = eta * (sc.length ** self.beta * sc.velocity / sc.force)
+        self.unit = (not self.forced and not self.damped and nb == n
+                     and bool(np.all(self.mass == 1.0)))
         a = alpha
         if a.size == 0 or (_alike(a) and a[0] == 1.0):
             self.mode, self.alpha0 = _state.MODE_LINEAR, 1.0
@@ -163,9 +169,9 @@ def _alloc_window(cap: int) -> dict:
         cb=np.zeros(cap, np.int64),
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
         X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
-        FS=np.zeros(cap), KV=np.zeros((_state._NSE, cap)),
+        FS=np.zeros(cap), KV=np.zeros((_state.KV_DS + 1, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
-        WP=np.zeros((4, lanes)),
+        WP=np.zeros((_state.W_HELD + 1, lanes)),
         TX=np.zeros((_state.PT + 1, cap)),
         TW=np.zeros(lanes * _state.TILE_ROWS),
         TR=np.zeros(cap),
@@ -238,15 +244,25 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     nb = P.nb
     ncont = max(nb - 1, 1)
     floor = velocity_floor(rtol)
-    cp = np.zeros((5, ncont))
+    cp = np.zeros((_state.C_DISS + 1, ncont))
     if nb > 1:
         cp[_state.C_KAPPA] = P.kappa
         cp[_state.C_ALPHA] = P.alpha
+        if P.damped:
+            cp[_state.C_ETA] = P.eta
+            cp[_state.C_BETA] = P.beta
         im = P.im[:-1] + P.im[1:]
         cp[_state.C_EPS] = _uniform(release_compression, P.alpha, floor, P.kappa, im)
         cp[_state.C_DORM] = _uniform(_level, _state.FORCE_DORMANT, P.kappa, P.alpha)
         cp[_state.C_LOC] = _uniform(_level, _state.FORCE_LOCATE, P.kappa, P.alpha)
         cst, lvl, starts, ends, freed0 = _initial_contacts(P, cp, floor)
+        if P.damped:
+            # a damped contact active at t = 0 whose load would pull starts held at 0
+            y, v = P.y0, P.v0
+            c = y[:-1] - y[1:]
+            load = (P.kappa * np.sign(c) * np.abs(c) ** P.alpha
+                    + P.eta * np.abs(c) ** P.beta * (v[:-1] - v[1:]))
+            cp[_state.C_HELD] = ((cst != _state.OPEN) & (P.eta > 0.0) & (load < 0.0))
     else:
         cst, lvl = np.full(1, _state.DORMANT, np.int8), np.zeros(1)
         starts = ends = freed0 = np.zeros(0, np.int64)
@@ -274,6 +290,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     ints[_state.I_MODE] = P.mode
     ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_FORCED] = 1 if P.forced else 0
+    ints[_state.I_DAMPED] = 1 if P.damped else 0
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),
@@ -380,10 +397,12 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     keep = on_snapshot is None
     positions = np.empty((nt, n)) if keep else None
     velocities = np.empty((nt, n)) if keep else None
+    dissipated = np.zeros(nt)
 
     def emit(i, t):
         x = P.positions(S.ox)
         v = P.velocities(S.ov)
+        dissipated[i] = S.fs[_state.F_DOUT] * sc.energy
         if keep:
             positions[i] = x
             velocities[i] = v
@@ -472,6 +491,12 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     message = _message(outcome, t_final * tscale, int(S.ints[_state.I_EVTOTAL]), S, P)
     diagnostics = _diagnostics(P, S, y_final, v_final, t_final, wall, rtol,
                                int(event_time.size))
+    per_contact = S.cp[_state.C_DISS] * sc.energy
+    walls = np.zeros(2)
+    if P.lw:
+        walls[0] = per_contact[0]
+    if P.rw:
+        walls[1] = per_contact[P.nb - 2]
     moving = np.flatnonzero(line.velocity != 0.0)
     alphas = np.concatenate([line.alpha, [w.alpha for w in line.walls if w is not None]])
     return Solution(
@@ -487,6 +512,9 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         times=times, positions=positions, velocities=velocities,
         diagnostics=diagnostics, sensor_balls=sensor_balls, sensor_time=sensor_time,
         sensor_force=sensor_force, line=line,
+        dissipated=dissipated, dissipated_energy=float(S.fs[_state.F_DISS]) * sc.energy,
+        contact_dissipation=per_contact[P.lw:P.lw + n - 1].copy() if n > 1 else np.zeros(0),
+        wall_dissipation=walls,
     )
 
 
@@ -499,7 +527,8 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     checked, the wall's impulse not being tracked: NaN), relative to the momentum of the
     line's scales; kinetic plus contact energy less the forces' work is conserved,
     relative to the initial kinetic energy (or, for a line starting at rest, to its
-    initial energy or the work, the larger).
+    initial energy or the work, the larger); on a damped line the energy the damping
+    dissipated counts in the balance.
     """
     line = P.line
     if line.is_paper and np.all(line.alpha == P.alpha0):
@@ -520,7 +549,9 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
             p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
         k0 = float(line_kinetic_energy(v0, m))
         e0 = k0 + float(line_potential_energy(x0, line))
-        e1 = float(line_kinetic_energy(v1, m) + line_potential_energy(x1, line))
+        # what the damping dissipated is part of the balance
+        e1 = float(line_kinetic_energy(v1, m) + line_potential_energy(x1, line)
+                   + S.fs[_state.F_DISS] * sc.energy)
         # relative to the energy of the impact (a precompressed line stores far more,
         # at rest), or for a line starting at rest to the energy it takes up
         scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))

@@ -1,4 +1,5 @@
-"""Event location: the first contact in the last step to open, close, engage or release.
+"""Event location: the first contact in the last step to open, close, engage or release,
+or, on a damped line, whose force is held at 0 or rises from it (unload, reload).
 
 Events are located on the dense output by sampling each candidate contact at several
 points of the step (an opening can re-close within one step) and bracketing the first
@@ -21,12 +22,14 @@ from chainrun.solver._compression import (
     _bernstein_range, _contact_series, _curvature_bound, _sample_series, _series_at,
     _stays_open,
 )
+from chainrun.solver._forces import _load
 from chainrun.solver._generated import _series_bounds
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    ACTIVE, C_DORM, C_EPS, C_LOC, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE,
-    FRESH, F_FLOOR, F_HLAST, HI_ROW, I_EVTOTAL, I_M, I_NCL, I_NEV, I_TAY, LO_ROW,
-    N_SAMPLES, N_SERIES_SAMPLES, OPEN, _tw,
+    ACTIVE, C_ALPHA, C_BETA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, C_LOC, DORMANT, EPS,
+    EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR,
+    F_HLAST, HI_ROW, I_DAMPED, I_EVTOTAL, I_M, I_NCL, I_NEV, I_TAY, LO_ROW, N_SAMPLES,
+    N_SERIES_SAMPLES, OPEN, _tw,
 )
 from chainrun.solver._steppers import _ball_at, _ball_end
 
@@ -87,6 +90,80 @@ def _crossing(S, j, ta, tb, ca, cb_, level):
             side = 1
     # the side past the level, so the event is not missed by a hair
     return tb
+
+
+@kernel(inline="always")
+def _contact_load(S, j, c, w):
+    """Contact j's damped force before it is held at 0 (_forces._load)."""
+    cp = S.cp
+    return _load(cp[C_KAPPA, j], cp[C_ALPHA, j], cp[C_ETA, j], cp[C_BETA, j], c, w)
+
+
+@kernel
+def _load_at(S, j, th):
+    """(_contact_load, compression) of contact j at t_prev + th * h_last."""
+    if th <= 0.0 or th >= 1.0:
+        c, w, _s = _contact_end(S, j, th)
+    else:
+        c, w, _s = _contact_at(S, j, th)
+    return _contact_load(S, j, c, w), c
+
+
+@kernel
+def _load_crossing(S, j, ta, tb, ga, gb):
+    """Root of contact j's load (bracketed in [ta, tb]), by safeguarded regula falsi;
+    the side past it, as _crossing."""
+    side = 0
+    for _ in range(100):
+        if tb - ta <= 4.0 * EPS * max(1.0, tb):
+            break
+        tm = tb - gb * (tb - ta) / (gb - ga) if gb != ga else 0.5 * (ta + tb)
+        if not (tm > ta and tm < tb):
+            tm = 0.5 * (ta + tb)
+        gm = _load_at(S, j, tm)[0]
+        if gm == 0.0:
+            return tm
+        if (gm > 0.0) == (ga > 0.0):
+            ta = tm
+            ga = gm
+            if side == -1:
+                gb *= 0.5
+            side = -1
+        else:
+            tb = tm
+            gb = gm
+            if side == 1:
+                ga *= 0.5
+            side = 1
+    return tb
+
+
+@kernel
+def _unload_event(S, j, hcap):
+    """The first kink of damped contact j's force in the last step before ``hcap``.
+
+    Its load g = kappa f(c) + eta |c|^beta w (its force before it is held at 0) is
+    sampled on the dense output: a contact bearing its load unloads where g falls
+    below 0 (the collision ends, before the compression has gone), one held at 0
+    reloads where g rises above 0 while still compressed. C_HELD says which it is, so
+    a step that starts on the kink, within rounding of it on either side, finds no
+    second one there. Returns (theta, kind), theta = 2 when there is none.
+    """
+    held = S.cp[C_HELD, j] != 0.0
+    ta = 0.0
+    ga = _load_at(S, j, 0.0)[0]
+    for i in range(1, N_SAMPLES + 1):
+        tb = min(i / N_SAMPLES, hcap)
+        gb, cb_ = _load_at(S, j, tb)
+        if not held and ga >= 0.0 and gb < 0.0:
+            return _load_crossing(S, j, ta, tb, ga, gb), EV_UNLOAD
+        if held and ga <= 0.0 and gb > 0.0 and cb_ > 0.0:
+            return _load_crossing(S, j, ta, tb, ga, gb), EV_RELOAD
+        ta = tb
+        ga = gb
+        if tb >= hcap:
+            break
+    return 2.0, 0
 
 
 @kernel(inline="always")
@@ -297,4 +374,15 @@ def _find_event(S):
                 bj = j
                 bk = kind
                 blev = lev
+    if S.ints[I_DAMPED] == 1:
+        # the kinks of the damped forces inside the clusters
+        for c in range(S.ints[I_NCL]):
+            for j in range(S.clo[c], S.chi[c]):
+                if S.cp[C_ETA, j] != 0.0:
+                    th, kind = _unload_event(S, j, best)
+                    if th < best:
+                        best = th
+                        bj = j
+                        bk = kind
+                        blev = 0.0
     return best, bj, bk, blev

@@ -7,6 +7,10 @@ a step that ends on an opening sees no kink. ``mode`` picks the law's loop
 (``_state.MODE_*``): every contact linear, every contact Hertz, every contact one
 other alpha, or each its own. A ball's acceleration is its net contact force over its
 mass, plus that of its external force; a wall's inverse mass is 0.
+
+A damped lane (damping eta > 0) adds ``eta |c|^beta w``, w the rate of its compression,
+and its force is held at 0 from where that sum would pull: the switches are events
+(``_events._unload_event``), so inside a step the force is smooth.
 """
 
 from __future__ import annotations
@@ -15,8 +19,8 @@ import numpy as np
 
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    F_ALPHA, I_M, I_MODE, I_UNIT, MODE_HERTZ, MODE_LINEAR, MODE_MIXED, MODE_POWER,
-    W_ACC, W_ALPHA, W_IM,
+    F_ALPHA, I_DAMPED, I_M, I_MODE, I_UNIT, MODE_HERTZ, MODE_LINEAR, MODE_MIXED,
+    MODE_POWER, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM,
 )
 
 
@@ -81,11 +85,83 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
         out[nc] = F[nc - 1] * IM[nc] + GA[nc]
 
 
+@kernel(inline="always")
+def _damping(c, w, beta):
+    """|c|^beta w: the damping force of unit damping (beta = 0 and 1/2 without a pow)."""
+    if beta == 0.0:
+        return w
+    a = abs(c)
+    if beta == 0.5:
+        return np.sqrt(a) * w
+    return a ** beta * w
+
+
+@kernel(inline="always")
+def _load(kappa, alpha, eta, beta, c, w):
+    """kappa c|c|^(alpha-1) + eta |c|^beta w: a damped contact's force before it is held
+    at 0 (negative: it would pull)."""
+    return kappa * _force(c, MODE_MIXED, alpha) + eta * _damping(c, w, beta)
+
+
 @kernel
-def _rhs(S, Xs, out):
-    """Accelerations of the compact balls at positions ``Xs`` into ``out``."""
-    _accelerations(Xs, S.FS, S.TR, S.WP, out, S.ints[I_M], S.ints[I_MODE],
-                   S.fs[F_ALPHA], S.ints[I_UNIT] == 1)
+def _damped_forces(X, V, F, MK, WP, DS, wgt, m, mode, alpha):
+    """Forces of the m - 1 contact lanes at positions X and velocities V into F.
+
+    A damped lane bearing its load carries kappa f(c) + eta |c|^beta w, a lane held at
+    0 (W_HELD) nothing: the switch between the two, where the load changes sign, is an
+    event (_events._unload_event), so within a step each lane's force is smooth, and
+    the stages of a step that ends on the switch see its smooth continuation, as for
+    an opening (the force never pulls beyond that step). When ``wgt`` is not 0, a lane
+    bearing its load adds its damping's power eta |c|^beta w^2 times ``wgt`` (h times a
+    weight of the step's quadrature) to DS: summed over the stages of a step with
+    DOP853's weights, the energy it dissipated over the step, to the method's order.
+    (A lane held at 0 dissipates the elastic energy it still stores as its compression
+    goes: _loop._commit_dissipation counts that exactly, from the step's ends.)
+    """
+    AL, ETA, BETA, HELD = WP[W_ALPHA], WP[W_ETA], WP[W_BETA], WP[W_HELD]
+    for p in range(m - 1):
+        eta = ETA[p]
+        if eta != 0.0 and HELD[p] != 0.0:
+            F[p] = 0.0
+            continue
+        c = X[p] - X[p + 1]
+        fe = _force(c, mode, AL[p] if mode == MODE_MIXED else alpha) * MK[p]
+        if eta == 0.0:
+            F[p] = fe
+            continue
+        w = V[p] - V[p + 1]
+        fd = eta * _damping(c, w, BETA[p])
+        F[p] = fe + fd
+        if wgt != 0.0:
+            DS[p] += wgt * fd * w
+
+
+@kernel
+def _damped_accelerations(X, V, F, MK, WP, DS, wgt, out, m, mode, alpha):
+    """Accelerations of the m compact balls at (X, V) into out, on a damped line (see
+    _damped_forces; forces into F)."""
+    _damped_forces(X, V, F, MK, WP, DS, wgt, m, mode, alpha)
+    nc = m - 1
+    IM = WP[W_IM]
+    GA = WP[W_ACC]
+    if nc <= 0:  # (no cluster: nothing moves under a force)
+        return
+    out[0] = -F[0] * IM[0] + GA[0]
+    for p in range(1, nc):
+        out[p] = (F[p - 1] - F[p]) * IM[p] + GA[p]
+    out[nc] = F[nc - 1] * IM[nc] + GA[nc]
+
+
+@kernel
+def _rhs(S, Xs, Vs, out):
+    """Accelerations of the compact balls at positions ``Xs`` (and velocities ``Vs``,
+    on a damped line) into ``out``."""
+    if S.ints[I_DAMPED] == 1:
+        _damped_accelerations(Xs, Vs, S.FS, S.TR, S.WP, S.FS, 0.0, out, S.ints[I_M],
+                              S.ints[I_MODE], S.fs[F_ALPHA])
+    else:
+        _accelerations(Xs, S.FS, S.TR, S.WP, out, S.ints[I_M], S.ints[I_MODE],
+                       S.fs[F_ALPHA], S.ints[I_UNIT] == 1)
 
 
 @kernel(inline="always")

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from chainrun.solver._forces import _accelerations, _forces
+from chainrun.solver._forces import (
+    _accelerations, _damped_accelerations, _damped_forces, _forces,
+)
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_M, I_MODE, I_UNIT, J_OVER_K, LO_ROW,
-    SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,
+    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_DAMPED, I_M, I_MODE, I_UNIT, J_OVER_K, KV_DS,
+    KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,
+    _find_cluster, _tw,
 )
 
 
@@ -25,55 +28,120 @@ from chainrun.solver._state import (
 def _stages(S, h):
     """The 12 stages of a DOP853 step from (X0, V0, A0): new (X, V), stages in KV.
 
-    DOP853 applied to y = (x, v), y' = (v, a(x)), written in Nystrom form: the
-    stage velocities are eliminated, KV[s] holds the stage accelerations and
-    KV[12] those at the step's end.
+    DOP853 applied to y = (x, v), y' = (v, a(x, v)), written in Nystrom form:
+    KV[s] holds the stage accelerations and KV[12] those at the step's end. The
+    stage velocities are needed only on a damped line (VS), where the lanes'
+    dissipated power is summed with the step's weights into DS.
     """
     m = S.ints[I_M]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     unit = S.ints[I_UNIT] == 1
+    damped = S.ints[I_DAMPED] == 1
     F, MK, WP = S.FS, S.TR, S.WP
+    VS, DS = S.KV[KV_VS], S.KV[KV_DS]
     KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V
     for p in range(m):
         KV[0, p] = A0[p]
+    if damped:
+        for p in range(m):
+            DS[p] = 0.0
+        _damped_forces(X0, V0, F, MK, WP, DS, h * 0.054293734116568765, m, mode, alpha)
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * V0[p])
-    _accelerations(X, F, MK, WP, KV[1], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.05260015195876773 * KV[0, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[1], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[1], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.0789002279381516 * V0[p] + h * (0.003112622984346139 * KV[0, p]))
-    _accelerations(X, F, MK, WP, KV[2], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.0197250569845379 * KV[0, p] + 0.0591751709536137 * KV[1, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[2], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[2], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.1183503419072274 * V0[p] + h * (0.0017508504286947032 * KV[0, p] + 0.00525255128608411 * KV[1, p]))
-    _accelerations(X, F, MK, WP, KV[3], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.02958758547680685 * KV[0, p] + 0.08876275643042054 * KV[2, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[3], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[3], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971964 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
-    _accelerations(X, F, MK, WP, KV[4], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.2413651341592667 * KV[0, p] + -0.8845494793282861 * KV[2, p] + 0.924834003261792 * KV[3, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[4], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[4], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.3333333333333333 * V0[p] + h * (0.03533793130488635 * KV[0, p] + -0.09581915952175495 * KV[2, p] + 0.11603678377242414 * KV[3, p]))
-    _accelerations(X, F, MK, WP, KV[5], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.037037037037037035 * KV[0, p] + 0.17082860872947386 * KV[3, p] + 0.12546768756682242 * KV[4, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * 4.450312892752409, KV[5], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[5], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.25 * V0[p] + h * (0.018920483189113914 * KV[0, p] + -0.03815245266364541 * KV[2, p] + 0.05268745617004205 * KV[3, p] + -0.00220548669551055 * KV[4, p]))
-    _accelerations(X, F, MK, WP, KV[6], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.037109375 * KV[0, p] + 0.17025221101954405 * KV[3, p] + 0.06021653898045596 * KV[4, p] + -0.017578125 * KV[5, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * 1.8915178993145003, KV[6], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[6], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
-    _accelerations(X, F, MK, WP, KV[7], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.03709200011850479 * KV[0, p] + 0.17038392571223998 * KV[3, p] + 0.10726203044637328 * KV[4, p] + -0.015319437748624402 * KV[5, p] + 0.008273789163814023 * KV[6, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * -5.801203960010585, KV[7], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[7], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622033 * KV[0, p] + 0.46966087733519885 * KV[2, p] + -0.06814140470279369 * KV[3, p] + 0.01071185753171531 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
-    _accelerations(X, F, MK, WP, KV[8], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.6241109587160757 * KV[0, p] + -3.3608926294469414 * KV[3, p] + -0.868219346841726 * KV[4, p] + 27.59209969944671 * KV[5, p] + 20.154067550477894 * KV[6, p] + -43.48988418106996 * KV[7, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.3111643669578199, KV[8], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[8], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377502 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.07865735349516391 * KV[3, p] + 0.030838873981239242 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
-    _accelerations(X, F, MK, WP, KV[9], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.47766253643826434 * KV[0, p] + -2.4881146199716677 * KV[3, p] + -0.590290826836843 * KV[4, p] + 21.230051448181193 * KV[5, p] + 15.279233632882423 * KV[6, p] + -33.28821096898486 * KV[7, p] + -0.020331201708508627 * KV[8, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * -0.1521609496625161, KV[9], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[9], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.3721894995071433 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.4614987464855827 * KV[3, p] + -0.06518509348541897 * KV[4, p] + 4.098038403866562 * KV[5, p] + 3.8922102844072377 * KV[6, p] + -7.025278165955339 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
-    _accelerations(X, F, MK, WP, KV[10], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (-0.9371424300859873 * KV[0, p] + 5.186372428844064 * KV[3, p] + 1.0914373489967295 * KV[4, p] + -8.149787010746927 * KV[5, p] + -18.52006565999696 * KV[6, p] + 22.739487099350505 * KV[7, p] + 2.4936055526796523 * KV[8, p] + -3.0467644718982196 * KV[9, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.20136540080403034, KV[10], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[10], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382327 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931152 * KV[3, p] + 0.23253698859550578 * KV[4, p] + 11.903719357881853 * KV[5, p] + -1.9034949405460306 * KV[6, p] + -10.951226401858388 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
-    _accelerations(X, F, MK, WP, KV[11], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (2.273310147516538 * KV[0, p] + -10.53449546673725 * KV[3, p] + -2.0008720582248625 * KV[4, p] + -17.9589318631188 * KV[5, p] + 27.94888452941996 * KV[6, p] + -2.8589982771350235 * KV[7, p] + -8.87285693353063 * KV[8, p] + 12.360567175794303 * KV[9, p] + 0.6433927460157636 * KV[10, p])
+        _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.04471061572777259, KV[11], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[11], m, mode, alpha, unit)
     for p in range(m):
         X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.96687526183494 * KV[5, p] + 1.4186384244858756 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.06086437986500647 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
-    _accelerations(X, F, MK, WP, KV[12], m, mode, alpha, unit)
+    if damped:
+        _damped_accelerations(X, V, F, MK, WP, DS, 0.0, KV[12], m, mode, alpha)
+    else:
+        _accelerations(X, F, MK, WP, KV[12], m, mode, alpha, unit)
 
 
 @kernel
@@ -117,18 +185,35 @@ def _dense_stages(S):
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     unit = S.ints[I_UNIT] == 1
+    damped = S.ints[I_DAMPED] == 1
     F, MK, WP = S.FS, S.TR, S.WP
+    VS, DS = S.KV[KV_VS], S.KV[KV_DS]
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
         Xs[p] = X0[p] + h * (0.1 * V0[p] + h * (0.005054351963776213 * KV[0, p] + -0.41267006753617264 * KV[5, p] + -0.11888400830261192 * KV[6, p] + 0.5112504000718059 * KV[7, p] + -0.05239733207549385 * KV[8, p] + 0.06981946420649211 * KV[9, p] + 0.003198200361512927 * KV[10, p] + -0.0003710086893090569 * KV[11, p]))
-    _accelerations(Xs, F, MK, WP, KV[13], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.056167502283047954 * KV[0, p] + 0.25350021021662483 * KV[6, p] + -0.2462390374708025 * KV[7, p] + -0.12419142326381637 * KV[8, p] + 0.15329179827876568 * KV[9, p] + 0.00820105229563469 * KV[10, p] + 0.007567897660545699 * KV[11, p] + -0.008298 * KV[12, p])
+        _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[13], m, mode, alpha)
+    else:
+        _accelerations(Xs, F, MK, WP, KV[13], m, mode, alpha, unit)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
-    _accelerations(Xs, F, MK, WP, KV[14], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (0.03183464816350214 * KV[0, p] + 0.028300909672366776 * KV[5, p] + 0.053541988307438566 * KV[6, p] + -0.05492374857139099 * KV[7, p] + -0.00010834732869724932 * KV[10, p] + 0.0003825710908356584 * KV[11, p] + -0.00034046500868740456 * KV[12, p] + 0.1413124436746325 * KV[13, p])
+        _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[14], m, mode, alpha)
+    else:
+        _accelerations(Xs, F, MK, WP, KV[14], m, mode, alpha, unit)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.35886633997225575 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.024882489771726926 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
-    _accelerations(Xs, F, MK, WP, KV[15], m, mode, alpha, unit)
+    if damped:
+        for p in range(m):
+            VS[p] = V0[p] + h * (-0.42889630158379194 * KV[0, p] + -4.697621415361164 * KV[5, p] + 7.683421196062599 * KV[6, p] + 4.06898981839711 * KV[7, p] + 0.3567271874552811 * KV[8, p] + -0.0013990241651590145 * KV[12, p] + 2.9475147891527724 * KV[13, p] + -9.15095847217987 * KV[14, p])
+        _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[15], m, mode, alpha)
+    else:
+        _accelerations(Xs, F, MK, WP, KV[15], m, mode, alpha, unit)
 
 
 @kernel
@@ -137,7 +222,8 @@ def _dense_ball(S, p):
 
     Each stage's accelerations at a ball need its positions one ball further each
     way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is
-    cut at the ends of p's cluster, where its forces stop.
+    cut at the ends of p's cluster, where its forces stop. (Not on a damped line,
+    whose forces need the velocities too: _dense_at builds the whole window's.)
     """
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]

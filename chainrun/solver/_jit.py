@@ -50,6 +50,8 @@ def entry(fn):
     """
     with caching_into(cache_dir()):
         dispatcher = nb.njit(cache=True, **_OPTIONS)(fn)
+    if config.DISABLE_JIT:  # (NUMBA_DISABLE_JIT=1: plain Python, to debug)
+        return dispatcher
     compile_ = dispatcher.compile
 
     def compile(sig):
@@ -151,6 +153,8 @@ def prepare(dispatcher, *args, folder: Path | None = None, stream=None) -> bool:
 
     Returns True if it was compiled or loaded now, False if it was ready already.
     """
+    if config.DISABLE_JIT:
+        return False
     sig = tuple(nb.typeof(a) for a in args)
     if sig in dispatcher.overloads:
         return False

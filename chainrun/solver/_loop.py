@@ -18,15 +18,17 @@ import numpy as np
 
 from chainrun.solver._clusters import _activate, _deactivate, _rebuild, _sync
 from chainrun.solver._compression import _pressed_in_step
-from chainrun.solver._events import _find_event, _log, _rounding
+from chainrun.solver._events import _contact_at, _contact_load, _find_event, _log, _rounding
+from chainrun.solver._forces import _damping
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
 from chainrun.solver._state import (
-    ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_DORM, C_EPS, C_KAPPA, DORMANT, EPS,
-    EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, FRESH, F_FLOOR, F_H, F_HLAST, F_T, F_TEND,
-    F_TOUT, F_TPREV, F_TSAME, HI_ROW, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
-    I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ,
-    I_STEPS, I_TAY, PT, SERIES_CLUSTERS,
+    ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA,
+    C_HELD, C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD,
+    EV_UNLOAD, FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_T, F_TEND, F_TOUT, F_TPREV,
+    F_TSAME, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED, I_HAVEOUT,
+    I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY,
+    KV_DS, PT, SERIES_CLUSTERS, W_ETA, W_HELD,
     ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
     ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
@@ -77,14 +79,104 @@ def _state_at(S, b, tout, th):
     return _free_at(S, b, tout)
 
 
+# nodes and weights of 8-point Gauss-Legendre quadrature on [0, 1]
+_GAUSS_X = np.array([0.019855071751231856, 0.10166676129318664, 0.2372337950418355,
+                     0.4082826787521751, 0.5917173212478249, 0.7627662049581645,
+                     0.8983332387068134, 0.9801449282487681])
+_GAUSS_W = np.array([0.05061426814518813, 0.11119051722668724, 0.15685332293894363,
+                     0.18134189168918100, 0.18134189168918100, 0.15685332293894363,
+                     0.11119051722668724, 0.05061426814518813])
+
+
+@kernel(inline="always")
+def _stored(S, j, c):
+    """The elastic energy kappa c^(alpha+1) / (alpha+1) of contact j at compression c
+    (0 apart)."""
+    if not c > 0.0:
+        return 0.0
+    a = S.cp[C_ALPHA, j]
+    return S.cp[C_KAPPA, j] * c ** (a + 1.0) / (a + 1.0)
+
+
+@kernel
+def _dissipated_at(S, th):
+    """The energy dissipated up to t_prev + th * h_last (the last step is counted in
+    F_DISS already): less what the damped lanes dissipate over the rest of the step,
+    by Gauss-Legendre quadrature of their power on its dense output (no kink inside a
+    step), or, for a lane held at 0, exactly (_commit_dissipation)."""
+    total = S.fs[F_DISS]
+    if th >= 1.0:
+        return total
+    span = (1.0 - th) * S.fs[F_HLAST]
+    m = S.ints[I_M]
+    for p in range(m - 1):
+        if S.WP[W_ETA, p] == 0.0:
+            continue
+        j = S.cb[p]
+        if S.WP[W_HELD, p] != 0.0:
+            total -= _stored(S, j, _contact_at(S, j, th)[0]) - _stored(S, j, S.X[p] - S.X[p + 1])
+            continue
+        eta = S.cp[C_ETA, j]
+        beta = S.cp[C_BETA, j]
+        for i in range(_GAUSS_X.shape[0]):
+            c, w, _s = _contact_at(S, j, th + (1.0 - th) * _GAUSS_X[i])
+            total -= span * _GAUSS_W[i] * eta * _damping(c, w, beta) * w
+    return total
+
+
+@kernel
+def _commit_dissipation(S):
+    """Add the energy the damped lanes dissipated over the step just accepted to their
+    contacts' and the line's totals: the quadrature of their damping's power (DS, see
+    _forces._damped_forces), or, for a lane held at 0, the elastic energy it lost as
+    its compression went, exactly (its power -kappa c^alpha c' is a derivative)."""
+    DS = S.KV[KV_DS]
+    step = 0.0
+    for p in range(S.ints[I_M] - 1):
+        if S.WP[W_ETA, p] != 0.0:
+            j = S.cb[p]
+            if S.WP[W_HELD, p] != 0.0:
+                d = _stored(S, j, S.X0[p] - S.X0[p + 1]) - _stored(S, j, S.X[p] - S.X[p + 1])
+            else:
+                d = DS[p]
+            S.cp[C_DISS, j] += d
+            step += d
+    S.fs[F_DISS] += step
+
+
+@kernel
+def _load_residual(S, j, c, w, a):
+    """(load, its rate, its rounding) of damped contact j at compression c, rate w and
+    relative acceleration a: Newton's residual where a step lands on an unload or a
+    reload."""
+    cp = S.cp
+    kappa = cp[C_KAPPA, j]
+    al = cp[C_ALPHA, j]
+    eta = cp[C_ETA, j]
+    beta = cp[C_BETA, j]
+    g = _contact_load(S, j, c, w)
+    ac = abs(c)
+    dg = kappa * al * ac ** (al - 1.0) * w
+    if beta == 0.0:
+        dg += eta * a
+        damp = eta * w
+    else:
+        dg += eta * (beta * ac ** (beta - 1.0) * w * w + ac ** beta * a)
+        damp = eta * ac ** beta * w
+    return g, dg, 16.0 * EPS * (kappa * ac ** al + abs(damp))
+
+
 @entry
 def _snapshot(S, tout):
-    """Fill (ox, ov) with the state at tout, inside the last step or in free flight."""
+    """Fill (ox, ov) with the state at tout, inside the last step or in free flight,
+    and fs[F_DOUT] with the energy dissipated by then."""
     th = _output_phase(S, tout)
     if th < 1.0 and S.ints[I_TAY] == 0:
         _dense(S)  # the whole window's interpolant at once
     for b in range(S.bx.shape[0]):
         S.ox[b], S.ov[b] = _state_at(S, b, tout, th)
+    if S.ints[I_DAMPED] == 1:
+        S.fs[F_DOUT] = _dissipated_at(S, th)
 
 
 @entry
@@ -114,6 +206,16 @@ def _engage_level(S, j):
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
+    if kind == EV_UNLOAD or kind == EV_RELOAD:
+        # a kink of a damped force: the contact stays active, its force held at 0
+        # (or not) by the law itself
+        held = 1.0 if kind == EV_UNLOAD else 0.0
+        S.cp[C_HELD, j] = held
+        p = S.bmap[j]
+        if p >= 0:
+            S.WP[W_HELD, p] = held
+        _log(S, t, j, kind)
+        return True
     if kind == EV_OPEN or kind == EV_RELEASE:
         ok = _deactivate(S, j, _engage_level(S, j))
         _log(S, t, j, kind)
@@ -384,7 +486,9 @@ def advance(S):
         _save_start(S)
         # the series where it reaches further than DOP853's next step, else DOP853
         h = S.fs[F_H]
-        ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS else 0.0
+        # (not on a damped line, whose forces depend on the velocities)
+        ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS and S.ints[I_DAMPED] == 0 \
+            else 0.0
         tay = ht >= h
         S.ints[I_TAY] = 1 if tay else 0
         if tay:
@@ -435,9 +539,13 @@ def advance(S):
                     break
                 xl, vl, al = _end_ball(S, j, t + hev)
                 xr, vr, ar = _end_ball(S, j + 1, t + hev)
-                res = (xl - xr) - lev
-                w = vl - vr
-                if abs(res) <= _rounding(abs(xl) + abs(xr)) or w == 0.0:
+                if kind == EV_UNLOAD or kind == EV_RELOAD:
+                    res, w, tol = _load_residual(S, j, xl - xr, vl - vr, al - ar)
+                else:
+                    res = (xl - xr) - lev
+                    w = vl - vr
+                    tol = _rounding(abs(xl) + abs(xr))
+                if abs(res) <= tol or w == 0.0:
                     landing = 1
                     break
                 dh = -res / w
@@ -470,5 +578,7 @@ def advance(S):
             S.fs[F_T] = tclip if clipped else t + h
             if not tay:
                 S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
+        if S.ints[I_DAMPED] == 1:
+            _commit_dissipation(S)
         S.ints[I_STEPS] += 1
         S.ints[I_POST] = 1

@@ -14,7 +14,8 @@ import numpy as np
 from chainrun.solver._forces import _potential
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    F_ALPHA, F_EPROJ, I_MODE, I_NCL, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA, W_IM, W_MASS,
+    F_ALPHA, F_EPROJ, I_DAMPED, I_MODE, I_NCL, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA, W_IM,
+    W_MASS,
 )
 
 
@@ -81,8 +82,11 @@ def _project_energy(S):
     is not small against the motion it rescales (over 1e-6 of its kinetic energy) is
     not that motion's integration error, and is not applied. The corrections add up in
     fs[F_EPROJ], a measure of the integration error. (Hairer, Lubich & Wanner,
-    Geometric Numerical Integration, IV.4: projection methods.)
+    Geometric Numerical Integration, IV.4: projection methods.) A damped line's energy
+    is not conserved, and is never projected.
     """
+    if S.ints[I_DAMPED] == 1:
+        return
     M = S.WP[W_MASS]
     for c in range(S.ints[I_NCL]):
         o = S.coff[c]

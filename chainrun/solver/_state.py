@@ -84,6 +84,10 @@ EV_RELEASE = -2
 EV_OPEN = -1
 EV_CLOSE = 1
 EV_ENGAGE = 2
+# a damped contact's force reaches 0 while it is still compressed (the collision
+# ends), and rises again from 0 before the compression has gone (a third ball pushes)
+EV_UNLOAD = -3
+EV_RELOAD = 3
 
 #: a dormant contact engages where its force kappa c^alpha would reach this (cp[C_DORM] =
 #: (FORCE_DORMANT/kappa)^(1/alpha), 1e-24 for alpha = 1, 1e-16 for Hertz): far below rounding of
@@ -115,11 +119,11 @@ YIELD_STEPS = 20000
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
-    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_NFLOAT = range(16)
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_NFLOAT = range(18)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_NINT = range(25)
+    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_NINT = range(26)
 
 # ---- the force laws (I_MODE) ----------------------------------------------------------
 MODE_LINEAR = 0  # every contact alpha = 1
@@ -133,11 +137,17 @@ MODE_MIXED = 3  # each contact its own alpha (WP[W_ALPHA] in the window)
 B_MASS, B_IM, B_ACC = range(3)
 # per contact, cp: stiffness, exponent, and the contact's thresholds: the compression
 # whose energy gives a relative speed of the floor (eps_rel, see _driver), and those
-# where its force reaches FORCE_DORMANT and FORCE_LOCATE
-C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC = range(5)
-# per compact ball, WP: inverse mass, external acceleration, mass, and the exponent of
-# the contact lane it starts (MODE_MIXED)
-W_IM, W_ACC, W_MASS, W_ALPHA = range(4)
+# where its force reaches FORCE_DORMANT and FORCE_LOCATE; its damping and damping
+# exponent, 1 while its damped force is held at 0 (since EV_UNLOAD), and the energy
+# its damping has dissipated so far
+C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC, C_ETA, C_BETA, C_HELD, C_DISS = range(9)
+# per compact ball, WP: inverse mass, external acceleration, mass, and the exponent,
+# damping, damping exponent and C_HELD of the contact lane it starts
+W_IM, W_ACC, W_MASS, W_ALPHA, W_ETA, W_BETA, W_HELD = range(7)
+# extra rows of KV on a damped line: the stage velocities, and each lane's energy
+# dissipated over the step being taken (see _forces._damped_forces)
+KV_VS = _NSE
+KV_DS = _NSE + 1
 
 State = namedtuple(
     "State",

@@ -31,7 +31,7 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV,
-    I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
+    I_DAMPED, I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
     TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
 )
 
@@ -165,7 +165,7 @@ def _taylor_step(S, h):
             V[p] = V[p] * h + k * T[k, p]
     for p in range(m):
         X[p] = X[p] * h + T[0, p]
-    _rhs(S, X, S.A)
+    _rhs(S, X, V, S.A)
     for p in range(m):
         if not (np.isfinite(X[p]) and np.isfinite(V[p])):
             return np.inf
@@ -230,9 +230,13 @@ def _dense_at(S, p):
 
     An event search asks for the two balls of a contact or so per step; the three
     extra stages they need reach three balls each way (_dense_ball), so the cost does
-    not grow with the window.
+    not grow with the window. On a damped line, whose forces need the stage velocities
+    too, the whole window's is built.
     """
     if S.ints[I_DENSE] == 1 or S.DM[p] == S.ints[I_DSTAMP]:
+        return
+    if S.ints[I_DAMPED] == 1:
+        _dense(S)
         return
     _dense_ball(S, p)
     _interp_rows(S, p)
