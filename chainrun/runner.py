@@ -81,6 +81,7 @@ class RunSummary:
     message: str
     final_velocity: np.ndarray
     skipped: bool = False
+    dissipated: float = 0.0  # share of the initial kinetic energy the damping took
 
     def line(self) -> str:
         """One line: how the run ended, its cost and its conservation errors."""
@@ -92,7 +93,9 @@ class RunSummary:
             how = self.message
         text = (f"{how}, {self.events} events, {self.steps} steps, "
                 f"{momentum_text(self.momentum_error)}, |dE|/E = {self.energy_error:.1e}, "
-                f"{self.wall_time:.2f} s")
+                + (f"dissipated {self.dissipated:.1%} of the impact energy, "
+                   if self.dissipated else "")
+                + f"{self.wall_time:.2f} s")
         if self.skipped:
             return f"{self.run_id}: skipped, file up to date ({text})"
         return f"{self.run_id}: {text}"
@@ -216,7 +219,14 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         momentum_error=d.momentum_error, energy_error=d.energy_error,
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
+        dissipated=_share(sol.dissipated_energy, line.mass, line.velocity),
     )
+
+
+def _share(dissipated: float, mass, velocity) -> float:
+    """``dissipated`` as a share of the initial kinetic energy (0 without either)."""
+    initial = 0.5 * float(np.sum(np.asarray(mass) * np.asarray(velocity) ** 2))
+    return dissipated / initial if dissipated and initial else 0.0
 
 
 def read_summary(path, spec: RunSpec) -> RunSummary:
@@ -238,6 +248,8 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
+        dissipated=_share(run.dissipated_energy, run.model["mass"], run.model["velocity"])
+        if run.model is not None else 0.0,
     )
 
 

@@ -579,6 +579,12 @@ class RunWriter:
         ):
             ds = _array(model, name, getattr(line, name), [scale], long_name)
             ds.attrs["unit"] = units[unit]
+        if line.is_damped:
+            eta = _array(model, "damping", line.damping, [contact],
+                         "eta of F = max(0, kappa delta^alpha + eta delta^beta d(delta)/dt)")
+            eta.attrs["unit"] = "SI (N s m^-(1+beta))" if self._units == "si" else "1"
+            _array(model, "damping_exponent", line.damping_exponent, [contact],
+                   "beta, the damping's exponent").attrs["unit"] = "1"
         walls = _group(model, "walls")
         for side, wall in (("left", line.left), ("right", line.right)):
             if wall is not None:
@@ -586,6 +592,9 @@ class RunWriter:
                 g.attrs["stiffness"] = np.float64(wall.stiffness)
                 g.attrs["alpha"] = np.float64(wall.alpha)
                 g.attrs["gap"] = np.float64(wall.gap)
+                if wall.damping:
+                    g.attrs["damping"] = np.float64(wall.damping)
+                    g.attrs["damping_exponent"] = np.float64(wall.damping_exponent)
         scales = _group(model, "scales")
         sc = line.scales()
         for name in ("mass", "length", "time", "velocity", "force"):
@@ -677,6 +686,8 @@ class RunWriter:
                 raise StoreError(f"{self.path}: {name} has shape {data.shape}, expected ({n},)")
             ds = _array(results, name, data, [ball], long_name)
             ds.attrs["unit"] = UNITS[self._units][name.split("_")[1]]
+        if sol.line is not None and sol.line.is_damped:
+            self._write_dissipation(h5, results, sol)
         results.attrs["end_time"] = np.float64(sol.end_time)
         results.attrs["terminal"] = np.bool_(sol.terminal)
         results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
@@ -719,6 +730,29 @@ class RunWriter:
             _array(sensors, "mean_force", force.mean(axis=2), [sample, sensor],
                    "mean of the two contact forces: what a sensor inside the ball measures")
             sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
+
+    def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution) -> None:
+        """What a damped line dissipated: by each snapshot (an observable beside the
+        energies), in total, and by each contact and wall."""
+        energy = UNITS[self._units]["energy"]
+        times = np.asarray(sol.times, dtype=np.float64)
+        element = _Element(_group(h5, "observables"), "dissipated_energy", (), [],
+                           len(times), "energy dissipated by the damping since t = 0")
+        for i, (t, d) in enumerate(zip(times, sol.dissipated)):
+            element.append(i, float(t), float(d))
+        element.flush()
+        element.value.attrs["unit"] = energy
+        element.time.attrs["unit"] = UNITS[self._units]["time"]
+        results.attrs["dissipated_energy"] = np.float64(sol.dissipated_energy)
+        results.attrs["dissipated_energy_unit"] = energy
+        contact = _scale(results, "contact", np.arange(1, self._n, dtype=np.int64),
+                         "contact j = 1..N-1 joins balls j and j+1")
+        ds = _array(results, "contact_dissipation",
+                    np.asarray(sol.contact_dissipation, dtype=np.float64), [contact],
+                    "energy each contact dissipated by end_time")
+        ds.attrs["unit"] = energy
+        for side, value in zip(("left", "right"), sol.wall_dissipation):
+            results.attrs[f"{side}_wall_dissipation"] = np.float64(value)
 
     def abort(self) -> None:
         """Close and delete the temporary file; nothing is written under ``path``."""
@@ -827,7 +861,8 @@ class RunData:
     positions, velocities : Snapshots, shape (T, N)
         Read lazily; ``np.asarray`` loads all.
     observables : dict of ndarray, shape (T,)
-        ``kinetic_energy``, ``potential_energy``, ``momentum`` at each snapshot.
+        ``kinetic_energy``, ``potential_energy``, ``momentum`` at each snapshot, and on
+        a damped line ``dissipated_energy``, the energy the damping took by then.
     final_position, final_velocity, separation_time, separation_velocity : ndarray, shape (N,)
     event_time : ndarray, shape (E,)
     event_contact : ndarray of int64, shape (E,)
@@ -844,8 +879,9 @@ class RunData:
     model : dict or None
         The line as solved (``/model``): ``units``; per ball ``mass``, ``velocity``,
         ``position``, ``force`` (shape (N,)); per contact ``stiffness``, ``alpha``,
-        ``gap`` (shape (N-1,)); ``walls`` ({"left"/"right": {"stiffness", "alpha",
-        "gap"}}, the walls present) and ``scales`` (mass, length, time, velocity,
+        ``gap``, ``damping``, ``damping_exponent`` (shape (N-1,)); ``walls``
+        ({"left"/"right": {"stiffness", "alpha", "gap", "damping",
+        "damping_exponent"}}, the walls present) and ``scales`` (mass, length, time, velocity,
         force: the paper's units of this line, in its units). None for files written
         before the model was recorded: those hold the paper's line.
     sensor_balls : ndarray of int64, shape (S,)
@@ -853,6 +889,12 @@ class RunData:
     sensor_time : ndarray, shape (M,)
     sensor_force : ndarray, shape (M, S, 2)
         Contact forces on each side of each sensor ball at each sample time.
+    dissipated_energy : float
+        The energy the damping dissipated by ``end_time`` (0 for an elastic line).
+    contact_dissipation : ndarray, shape (N-1,), or None
+        The same by each contact (None for an elastic line).
+    wall_dissipation : ndarray, shape (2,)
+        The same by the left and right walls.
     """
 
     path: Path
@@ -882,6 +924,9 @@ class RunData:
     sensor_time: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     sensor_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0, 2)))
     model: dict[str, Any] | None = None
+    dissipated_energy: float = 0.0
+    contact_dissipation: np.ndarray | None = None
+    wall_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
 
     @property
     def n(self) -> int:
@@ -895,20 +940,27 @@ class RunData:
     def contact_forces(self, stride: int = 1) -> np.ndarray:
         """Contact forces ``kappa (c - g)_+^alpha`` at the snapshots, from the stored
         positions and the line's stiffnesses, exponents and gaps (the paper's law for
-        its line), of every ``stride``-th contact (reading only its two balls); shape
-        (T, C)."""
+        its line; on a damped line, its damped law, from the velocities too), of every
+        ``stride``-th contact (reading only its two balls); shape (T, C)."""
         n = self.n
+        keys = ["alpha", "stiffness", "gap"]
+        damped = self.model is not None and bool(np.any(self.model["damping"] != 0.0))
         if self.model is None:
             law = dict(alpha=self.alpha)
         else:
-            law = {key: np.asarray(self.model[key])[::stride]
-                   for key in ("alpha", "stiffness", "gap")}
+            keys += ["damping", "damping_exponent"] if damped else []
+            law = {key: np.asarray(self.model[key])[::stride] for key in keys}
         if stride == 1:
+            if damped:
+                law["v"] = np.asarray(self.velocities)
             return physics.contact_forces(np.asarray(self.positions), **law)
+        law = {k: np.asarray(v)[:, None] if np.ndim(v) else v for k, v in law.items()}
+        if damped:
+            law["v"] = np.stack([self.velocities[:, 0:n - 1:stride],
+                                 self.velocities[:, 1:n:stride]], axis=-1)
         pairs = np.stack([self.positions[:, 0:n - 1:stride],
                           self.positions[:, 1:n:stride]], axis=-1)
-        return physics.contact_forces(pairs, **{k: np.asarray(v)[:, None] if np.ndim(v)
-                                                 else v for k, v in law.items()})[..., 0]
+        return physics.contact_forces(pairs, **law)[..., 0]
 
     @property
     def k(self) -> int:
@@ -975,6 +1027,8 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
     steps = _get(pos, "step")[()]
     shape = _get(pos, "value").shape[:2]
     observables = {name: _get(h5, f"observables/{name}/value")[()] for name in OBSERVABLES}
+    if "dissipated_energy" in h5["observables"]:  # a damped line's
+        observables["dissipated_energy"] = _get(h5, "observables/dissipated_energy/value")[()]
     res = _get(h5, "results")
     ev = _get(h5, "events")
     diag = _get(h5, "diagnostics")
@@ -1003,7 +1057,18 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
         model=_read_model(h5),
         **_read_sensors(h5),
+        **_read_dissipation(res),
     )
+
+
+def _read_dissipation(res: h5py.Group) -> dict:
+    """What a damped line dissipated (optional: elastic lines have none)."""
+    if "dissipated_energy" not in res.attrs:
+        return {}
+    return dict(dissipated_energy=float(res.attrs["dissipated_energy"]),
+                contact_dissipation=_get(res, "contact_dissipation")[()],
+                wall_dissipation=np.array([float(res.attrs.get(f"{side}_wall_dissipation", 0.0))
+                                           for side in ("left", "right")]))
 
 
 def _read_model(h5: h5py.File) -> dict[str, Any] | None:
@@ -1015,8 +1080,12 @@ def _read_model(h5: h5py.File) -> dict[str, Any] | None:
     for name in ("mass", "velocity", "position", "force", "stiffness", "alpha", "gap"):
         model[name] = _get(group, name)[()]
     walls = _get(group, "walls")
-    model["walls"] = {side: {key: float(walls[side].attrs[key])
-                             for key in ("stiffness", "alpha", "gap")}
+    for name in ("damping", "damping_exponent"):  # a damped line's
+        n_contacts = model["stiffness"].shape[0]
+        model[name] = _get(group, name)[()] if name in group else np.zeros(n_contacts)
+    model["walls"] = {side: {key: float(walls[side].attrs.get(key, 0.0))
+                             for key in ("stiffness", "alpha", "gap", "damping",
+                                         "damping_exponent")}
                       for side in ("left", "right") if side in walls}
     model["scales"] = {key: float(value) for key, value in _get(group, "scales").attrs.items()}
     return model

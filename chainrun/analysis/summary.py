@@ -9,6 +9,7 @@ of the impact energy K/2 (the paper's line only).
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -72,6 +73,9 @@ class RunSummary:
     last_time: float
     file_bytes: int
     model: str = ""  # the general line in brief ("" for the paper's line)
+    dissipated: float = 0.0  # energy the damping took (0: elastic)
+    dissipated_share: float = 0.0  # ... as a share of the initial kinetic energy
+    dissipating: int = 0  # the contact (1-based) that dissipated most; 0: a wall or none
 
 
 def _span(a: np.ndarray, unit: str) -> str:
@@ -93,7 +97,7 @@ def describe_model(model: dict | None) -> str:
     paper = (not si and np.all(mass == 1.0) and np.all(stiffness == 1.0)
              and not np.any(model["gap"]) and not np.any(model["force"])
              and not model["walls"] and np.all(np.isin(model["velocity"], (0.0, 1.0)))
-             and np.all(alpha == alpha[:1]))
+             and np.all(alpha == alpha[:1]) and not np.any(model["damping"]))
     if paper:
         return ""
     parts = [f"masses {_span(mass, 'kg' if si else '')}",
@@ -103,7 +107,11 @@ def describe_model(model: dict | None) -> str:
         parts.append(f"gaps {_span(model['gap'], 'm' if si else '')}")
     if np.any(model["force"]):
         parts.append(f"forces on {int(np.count_nonzero(model['force']))} balls")
-    walls = [f"{side} (stiffness {w['stiffness']:.4g}, alpha {w['alpha']:g}, gap {w['gap']:g})"
+    if np.any(model["damping"]):
+        parts.append(f"damping {_span(model['damping'], '')} "
+                     f"(exponent {_span(model['damping_exponent'], '')})")
+    walls = [f"{side} (stiffness {w['stiffness']:.4g}, alpha {w['alpha']:g}, gap {w['gap']:g}"
+             + (f", damping {w['damping']:.4g}" if w.get("damping") else "") + ")"
              for side, w in model["walls"].items()]
     parts.append("walls: " + (", ".join(walls) if walls else "none"))
     v = model["velocity"]
@@ -161,4 +169,20 @@ def summarize(run) -> RunSummary:
         last_time=float(run.times[-1]) if run.times.size else float("nan"),
         file_bytes=os.path.getsize(run.path),
         model=describe_model(getattr(run, "model", None)),
+        **_dissipation(run),
     )
+
+
+def _dissipation(run) -> dict:
+    """What the damping took, as a share of the initial kinetic energy, and where."""
+    energy = float(getattr(run, "dissipated_energy", 0.0))
+    if not energy:
+        return {}
+    model = run.model
+    initial = 0.5 * float(np.sum(model["mass"] * model["velocity"] ** 2))
+    per = run.contact_dissipation
+    most = int(np.argmax(per)) + 1 if per is not None and per.size else 0
+    if per is not None and per.size and np.max(run.wall_dissipation) > per[most - 1]:
+        most = 0
+    return dict(dissipated=energy, dissipated_share=energy / initial if initial else math.nan,
+                dissipating=most)

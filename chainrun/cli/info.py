@@ -52,6 +52,10 @@ def render(s) -> str:
             f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
             f"{share['ejected']:.2%}, left behind {share['left behind']:.2%}, in contacts "
             f"{share['contacts']:.2%}"]),
+        *([f"damping   dissipated {s.dissipated:.6g} ({s.dissipated_share:.2%} of the initial "
+             f"kinetic energy), most "
+             + (f"at contact {s.dissipating}" if s.dissipating else "at a wall")]
+          if s.dissipated else []),
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
     ]

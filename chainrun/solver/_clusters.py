@@ -15,10 +15,9 @@ from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DENSE, I_DIRTY, I_DSTAMP, I_M,
-    I_MAXWIN, I_NCL, I_NFREED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM,
-    W_MASS,
-    _find_cluster, _free_at,
+    B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED, I_DENSE,
+    I_DIRTY, I_DSTAMP, I_M, I_MAXWIN, I_NCL, I_NFREED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA,
+    W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -88,7 +87,8 @@ def _free_ball(S, b):
 def _activate(S, j, state):
     """Make contact j active, joining the clusters/balls on both sides."""
     S.cst[j] = state
-    S.cp[C_HELD, j] = 0.0
+    if S.ints[I_DAMPED] == 1:
+        S.cp[C_HELD, j] = 0.0
     cl = _find_cluster(S, j)
     cr = _find_cluster(S, j + 1)
     lo = j
@@ -114,7 +114,8 @@ def _deactivate(S, j, level):
     """Make contact j inactive (engages again beyond ``level``), splitting its cluster."""
     S.cst[j] = OPEN
     S.lvl[j] = level
-    S.cp[C_HELD, j] = 0.0
+    if S.ints[I_DAMPED] == 1:
+        S.cp[C_HELD, j] = 0.0
     c = _find_cluster(S, j)
     if c < 0:
         return True
@@ -163,6 +164,7 @@ def _rebuild(S):
     # contact lanes: their stiffness inside a cluster, 0 from a cluster's last ball to
     # the next's first, with their exponents (a lane without force, and the series'
     # spare lanes, need only a finite one)
+    damped = S.ints[I_DAMPED] == 1
     for p in range(m):
         S.TR[p] = 0.0
         S.WP[W_ALPHA, p] = 1.0
@@ -174,9 +176,10 @@ def _rebuild(S):
             j = S.cb[p]
             S.TR[p] = S.cp[C_KAPPA, j]
             S.WP[W_ALPHA, p] = S.cp[C_ALPHA, j]
-            S.WP[W_ETA, p] = S.cp[C_ETA, j]
-            S.WP[W_BETA, p] = S.cp[C_BETA, j]
-            S.WP[W_HELD, p] = S.cp[C_HELD, j]
+            if damped:  # (cp has the damping's rows on a damped line only)
+                S.WP[W_ETA, p] = S.cp[C_ETA, j]
+                S.WP[W_BETA, p] = S.cp[C_BETA, j]
+                S.WP[W_HELD, p] = S.cp[C_HELD, j]
     for c in range(ncl):
         S.cen[c] = _cluster_energy(S, c)
     _rhs(S, S.X, S.V, S.A)

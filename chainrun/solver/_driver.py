@@ -48,7 +48,7 @@ def load_kernels(S: _state.State | None = None) -> None:
         S = _new_state(2, 1, 1.5, DEFAULT_RTOL, None, None)
     _jit.prepare(_loop.advance, S)
     _jit.prepare(_loop._snapshot, S, 0.0)
-    _jit.prepare(_loop._sample, S, 0.0, np.zeros(1, np.int64), np.zeros(1))
+    _jit.prepare(_loop._sample, S, 0.0, np.zeros(1, np.int64), np.zeros(1), np.zeros(1))
 
 
 def release_compression(alpha, floor, stiffness=1.0, inverse_mass=2.0):
@@ -244,7 +244,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     nb = P.nb
     ncont = max(nb - 1, 1)
     floor = velocity_floor(rtol)
-    cp = np.zeros((_state.C_DISS + 1, ncont))
+    cp = np.zeros(((_state.C_DISS if P.damped else _state.C_LOC) + 1, ncont))
     if nb > 1:
         cp[_state.C_KAPPA] = P.kappa
         cp[_state.C_ALPHA] = P.alpha
@@ -333,9 +333,10 @@ def _check_sensors(sensors, sensor_dt, n):
 
 
 class _Sensors:
-    """The samples of the sensor balls' neighbourhoods: internal positions of balls
-    b-1, b, b+1 (a wall's included) at t = 0, dt, 2 dt, ... (in the units of the
-    scales), turned into the contact forces on each side of b."""
+    """The samples of the sensor balls' neighbourhoods: internal positions (and
+    velocities, for a damped law) of balls b-1, b, b+1 (a wall's included) at t = 0,
+    dt, 2 dt, ... (in the units of the scales), turned into the contact forces on each
+    side of b."""
 
     def __init__(self, balls, dt, P: _Prepared):
         self.balls, self.dt, self.P = balls, dt, P
@@ -343,28 +344,34 @@ class _Sensors:
         near = np.concatenate([inner - 1, inner, inner + 1])
         self.probe = np.unique(near[(near >= 0) & (near < P.nb)]).astype(np.int64)
         self.buffer = np.empty(self.probe.size)
-        self.times, self.rows = [], []
+        self.vbuffer = np.empty(self.probe.size)
+        self.times, self.rows, self.vrows = [], [], []
         self.count = 0
 
     def next_time(self):
         return self.count * self.dt if self.balls.size else math.inf
 
-    def take(self, t, positions):
+    def take(self, t, positions, velocities):
         self.times.append(t)
         self.rows.append(np.array(positions, dtype=float))
+        self.vrows.append(np.array(velocities, dtype=float))
         self.count += 1
 
     def forces(self):
         P = self.P
         y = np.array(self.rows).reshape(len(self.rows), self.probe.size)
+        u = np.array(self.vrows).reshape(len(self.vrows), self.probe.size)
         where = {int(b): i for i, b in enumerate(self.probe)}
         out = np.zeros((y.shape[0], self.balls.size, 2))
         for s, ball in enumerate(self.balls - 1 + P.lw):
             for side, (a, b) in enumerate(((ball - 1, ball), (ball, ball + 1))):
                 if a >= 0 and b < P.nb:
+                    damping = dict(v=np.stack([u[:, where[a]], u[:, where[b]]], axis=-1),
+                                   damping=P.eta[a], damping_exponent=P.beta[a]) \
+                        if P.damped else {}
                     out[:, s, side] = contact_forces(
                         np.stack([y[:, where[a]], y[:, where[b]]], axis=-1),
-                        P.alpha[a], P.kappa[a])[:, 0]
+                        P.alpha[a], P.kappa[a], **damping)[:, 0]
         return np.array(self.times) * P.scales.time, out * P.scales.force
 
 
@@ -447,10 +454,10 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
                 nout += 1
             if tout == sensing.next_time():
                 if kind == 1:
-                    sensing.take(tout, S.ox[sensing.probe])
+                    sensing.take(tout, S.ox[sensing.probe], S.ov[sensing.probe])
                 else:
-                    _loop._sample(S, tout, sensing.probe, sensing.buffer)
-                    sensing.take(tout, sensing.buffer)
+                    _loop._sample(S, tout, sensing.probe, sensing.buffer, sensing.vbuffer)
+                    sensing.take(tout, sensing.buffer, sensing.vbuffer)
             request()
             if on_progress is not None:
                 on_progress(float(S.fs[_state.F_T]) * tscale)
@@ -479,8 +486,9 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         nout += 1
     # samples up to the end of the run (its last instant included)
     while sensing.next_time() <= t_final:
-        _loop._sample(S, sensing.next_time(), sensing.probe, sensing.buffer)
-        sensing.take(sensing.next_time(), sensing.buffer)
+        _loop._sample(S, sensing.next_time(), sensing.probe, sensing.buffer,
+                      sensing.vbuffer)
+        sensing.take(sensing.next_time(), sensing.buffer, sensing.vbuffer)
     sensor_time, sensor_force = sensing.forces()
     _loop._snapshot(S, t_final)
     y_final = S.ox.copy()
@@ -491,7 +499,7 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     message = _message(outcome, t_final * tscale, int(S.ints[_state.I_EVTOTAL]), S, P)
     diagnostics = _diagnostics(P, S, y_final, v_final, t_final, wall, rtol,
                                int(event_time.size))
-    per_contact = S.cp[_state.C_DISS] * sc.energy
+    per_contact = S.cp[_state.C_DISS] * sc.energy if P.damped else np.zeros(P.nb - 1)
     walls = np.zeros(2)
     if P.lw:
         walls[0] = per_contact[0]

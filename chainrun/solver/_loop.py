@@ -180,12 +180,12 @@ def _snapshot(S, tout):
 
 
 @entry
-def _sample(S, tout, balls, xs):
-    """Positions at tout of the balls listed (0-based) into xs: a snapshot of those
-    balls alone, at a cost in their number, not in N."""
+def _sample(S, tout, balls, xs, vs):
+    """Positions and velocities at tout of the balls listed (0-based) into xs, vs: a
+    snapshot of those balls alone, at a cost in their number, not in N."""
     th = _output_phase(S, tout)
     for i in range(balls.shape[0]):
-        xs[i] = _state_at(S, balls[i], tout, th)[0]
+        xs[i], vs[i] = _state_at(S, balls[i], tout, th)
 
 
 @kernel

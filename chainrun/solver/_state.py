@@ -139,7 +139,7 @@ B_MASS, B_IM, B_ACC = range(3)
 # whose energy gives a relative speed of the floor (eps_rel, see _driver), and those
 # where its force reaches FORCE_DORMANT and FORCE_LOCATE; its damping and damping
 # exponent, 1 while its damped force is held at 0 (since EV_UNLOAD), and the energy
-# its damping has dissipated so far
+# its damping has dissipated so far (these four rows on a damped line only)
 C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC, C_ETA, C_BETA, C_HELD, C_DISS = range(9)
 # per compact ball, WP: inverse mass, external acceleration, mass, and the exponent,
 # damping, damping exponent and C_HELD of the contact lane it starts

@@ -31,8 +31,8 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV,
-    I_DAMPED, I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE,
-    TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
+    I_DAMPED, I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT,
+    SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
 )
 
 

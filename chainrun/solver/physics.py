@@ -15,17 +15,25 @@ def compressions(x: np.ndarray) -> np.ndarray:
     return x[..., :-1] - x[..., 1:]
 
 
-def contact_forces(x: np.ndarray, alpha, stiffness=1.0, gap=0.0) -> np.ndarray:
+def contact_forces(x: np.ndarray, alpha, stiffness=1.0, gap=0.0, v=None, damping=0.0,
+                   damping_exponent=0.0) -> np.ndarray:
     """Force of each contact, ``kappa (c - g)_+^alpha`` (it never pulls); shape (..., N-1).
 
     ``alpha``, ``stiffness`` and ``gap`` are numbers or one per contact; ``c`` are the
-    differences of ``x`` (``compressions``), so a gap of 0 gives the paper's law.
+    differences of ``x`` (``compressions``), so a gap of 0 gives the paper's law. With
+    velocities ``v`` (shape of ``x``) and a ``damping`` eta (exponent beta), the damped
+    law ``max(0, kappa d^alpha + eta d^beta d')`` for d = c - g > 0, 0 apart.
     """
     c = compressions(x)
     if np.any(np.asarray(gap) != 0.0):
         c = c - gap
     f = np.clip(c, 0.0, None) ** alpha
-    return f if np.all(np.asarray(stiffness) == 1.0) else f * stiffness
+    f = f if np.all(np.asarray(stiffness) == 1.0) else f * stiffness
+    if v is None or not np.any(np.asarray(damping) != 0.0):
+        return f
+    d = np.clip(c, 0.0, None)
+    load = f + damping * d ** damping_exponent * compressions(v)
+    return np.where(c > 0.0, np.clip(load, 0.0, None), 0.0)
 
 
 def momentum(v: np.ndarray) -> np.ndarray:

@@ -1,0 +1,219 @@
+"""Damped contacts in the solver: restitution, contact duration and the energy budget.
+
+The references are closed forms (the linear dashpot's two-body motion, evaluated
+here), or the two-body relative motion integrated here with scipy, which shares no
+code with the solver.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from chainrun.solver import EventKind, Line, simulate_line
+from chainrun.solver.model import Wall
+from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
+
+
+def dashpot_collision(mu, kappa, eta, v):
+    """(restitution, duration) of the linear spring-dashpot, force held at 0: closed form.
+
+    delta(t) = (v / w) exp(-g t) sin(w t), g = eta / (2 mu), w^2 = kappa / mu - g^2
+    (under-damped); the collision ends at the first root of kappa delta + eta delta'.
+    """
+    g = eta / (2.0 * mu)
+    w = math.sqrt(kappa / mu - g * g)
+
+    def delta(t):
+        return v / w * math.exp(-g * t) * math.sin(w * t)
+
+    def rate(t):
+        return v * math.exp(-g * t) * (math.cos(w * t) - g / w * math.sin(w * t))
+
+    def load(t):
+        return kappa * delta(t) + eta * rate(t)
+
+    # the load is eta v > 0 at t = 0 and kappa delta < 0 at the half period: bracket
+    # its first root there
+    t_end = brentq(load, 1e-300, math.pi / w, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    return -rate(t_end) / v, t_end
+
+
+def two_body(mu, kappa, alpha, eta, beta, v):
+    """(restitution, duration) of mu c'' = -(kappa c^alpha + eta c^beta c'), held at 0
+    from where that would pull, integrated with scipy to its unload."""
+
+    def rhs(t, y):
+        c, w = y
+        c = max(c, 0.0)
+        return [y[1], -(kappa * c ** alpha + eta * c ** beta * w) / mu]
+
+    def load(t, y):
+        c = max(y[0], 0.0)
+        return kappa * c ** alpha + eta * c ** beta * y[1] if t > 0 else 1.0
+
+    load.terminal = True
+    load.direction = -1
+    scale = (mu * v * v / kappa) ** (1.0 / (alpha + 1.0)) / v  # the contact's time
+    sol = solve_ivp(rhs, (0.0, 50.0 * scale), [0.0, v], method="DOP853", rtol=1e-13,
+                    atol=1e-16 * max(v, scale * v), events=load)
+    t_end = float(sol.t_events[0][0])
+    return -float(sol.y_events[0][0][1]) / v, t_end
+
+
+def _pair(m1, m2, kappa, alpha, eta, beta, v):
+    return Line.make(2, mass=[m1, m2], stiffness=kappa, alpha=alpha, damping=eta,
+                     damping_exponent=beta, velocity=[v, 0.0])
+
+
+def _restitution(sol, v):
+    u = sol.final_velocity
+    return (u[1] - u[0]) / v
+
+
+@pytest.mark.parametrize("v", [1e-3, 1.0, 7.5e2])
+@pytest.mark.parametrize("m1,m2,kappa,eta", [(1.0, 1.0, 1.0, 0.1), (0.3, 2.0, 5.0, 1.2),
+                                             (2.0, 0.5, 1e3, 30.0)])
+def test_linear_dashpot_restitution_and_duration_are_the_closed_forms(m1, m2, kappa, eta, v):
+    mu = m1 * m2 / (m1 + m2)
+    e, duration = dashpot_collision(mu, kappa, eta, v)
+    sol = simulate_line(_pair(m1, m2, kappa, 1.0, eta, 0.0, v))
+    assert sol.terminal
+    assert _restitution(sol, v) == pytest.approx(e, abs=1e-9)
+    unload = sol.event_time[sol.event_kind == EventKind.UNLOAD]
+    assert unload.size == 1
+    assert unload[0] == pytest.approx(duration, rel=1e-9)
+    # momentum is kept, and what the collision took is what the damping dissipated
+    u = sol.final_velocity
+    assert m1 * u[0] + m2 * u[1] == pytest.approx(m1 * v, rel=1e-12)
+    lost = 0.5 * m1 * v * v - 0.5 * (m1 * u[0] ** 2 + m2 * u[1] ** 2)
+    assert sol.dissipated_energy == pytest.approx(lost, rel=1e-9)
+    assert sol.contact_dissipation == pytest.approx([sol.dissipated_energy], rel=1e-14)
+
+
+@pytest.mark.parametrize("alpha,beta", [(1.5, 0.5), (1.5, 0.25), (1.5, 0.0), (2.0, 1.0)])
+@pytest.mark.parametrize("v", [0.05, 1.0, 20.0])
+def test_nonlinear_laws_restitution_and_duration_match_a_two_body_integration(alpha, beta, v):
+    m1, m2, kappa, eta = 1.0, 1.7, 2.0, 0.4
+    mu = m1 * m2 / (m1 + m2)
+    e, duration = two_body(mu, kappa, alpha, eta, beta, v)
+    sol = simulate_line(_pair(m1, m2, kappa, alpha, eta, beta, v))
+    assert _restitution(sol, v) == pytest.approx(e, abs=1e-8)
+    unload = sol.event_time[sol.event_kind == EventKind.UNLOAD]
+    assert unload[0] == pytest.approx(duration, rel=1e-8)
+
+
+def test_the_tsuji_exponent_gives_a_restitution_independent_of_the_speed():
+    alpha = 1.5
+    es = [_restitution(simulate_line(_pair(1.0, 1.0, 1.0, alpha, 0.3, (alpha - 1) / 2, v)), v)
+          for v in (1e-3, 1e-1, 1.0, 10.0, 1e3)]
+    assert np.ptp(es) < 1e-9
+    assert 0.0 < es[0] < 1.0
+    # and with Kuwabara-Kono's exponent it does depend on the speed
+    kk = [_restitution(simulate_line(_pair(1.0, 1.0, 1.0, alpha, 0.3, 0.5, v)), v)
+          for v in (1e-1, 10.0)]
+    assert kk[0] > kk[1] + 0.01
+
+
+def test_a_damped_wall_bounce_is_the_two_body_collision_with_the_ball_mass():
+    m, kappa, eta, v = 0.7, 3.0, 0.5, 2.0
+    line = Line.make(1, mass=m, velocity=[v],
+                     right=Wall(kappa, alpha=1.0, damping=eta, damping_exponent=0.0))
+    sol = simulate_line(line)
+    e, duration = dashpot_collision(m, kappa, eta, v)
+    assert sol.terminal
+    assert -sol.final_velocity[0] / v == pytest.approx(e, abs=1e-9)
+    assert sol.wall_dissipation[1] == pytest.approx(0.5 * m * v * v * (1 - e * e), rel=1e-9)
+    assert sol.wall_dissipation[0] == 0.0
+
+
+def _random_damped_line(rng, n):
+    law = rng.integers(4)
+    alpha = [1.0, 1.5, 1.5, rng.uniform(1.0, 2.5, n - 1)][law]
+    beta = [0.0, 0.5, 0.25, rng.uniform(0.0, 1.0, n - 1)][law]
+    right = None
+    if rng.random() < 0.5:
+        right = Wall(rng.uniform(0.5, 2.0), alpha=1.5, damping=rng.uniform(0.0, 0.5),
+                     damping_exponent=0.5)
+    velocity = np.zeros(n)
+    velocity[:rng.integers(1, 3)] = rng.uniform(0.5, 2.0)
+    return Line.make(n, mass=rng.uniform(0.3, 3.0, n), stiffness=rng.uniform(0.5, 2.0, n - 1),
+                     alpha=alpha, damping=rng.uniform(0.0, 0.8, n - 1),
+                     damping_exponent=beta, velocity=velocity, right=right)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_energy_balance_on_random_damped_lines(seed):
+    """kinetic + contact energy + dissipated = initial, at every snapshot and at the end,
+    computed here from the positions and velocities the solver returns."""
+    rng = np.random.default_rng(seed)
+    line = _random_damped_line(rng, int(rng.integers(3, 9)))
+    times = np.linspace(0.0, 20.0, 41)
+    sol = simulate_line(line, times, t_end=40.0)
+    e0 = float(line_kinetic_energy(line.velocity, line.mass))
+    for x, v, d in zip(sol.positions, sol.velocities, sol.dissipated):
+        e = float(line_kinetic_energy(v, line.mass) + line_potential_energy(x, line))
+        assert abs(e + d - e0) <= 1e-10 * e0
+    assert np.all(np.diff(sol.dissipated) >= -1e-14 * e0)
+    assert sol.diagnostics.energy_error <= 1e-10
+    total = sol.contact_dissipation.sum() + sol.wall_dissipation.sum()
+    assert total == pytest.approx(sol.dissipated_energy, rel=1e-12)
+    if line.right is None:  # no wall: momentum is kept
+        p = line.mass @ sol.final_velocity
+        assert p == pytest.approx(line.mass @ line.velocity, rel=1e-12)
+
+
+def test_every_damped_collision_unloads_before_it_opens():
+    rng = np.random.default_rng(5)
+    n = 8
+    line = Line.make(n, mass=rng.uniform(0.5, 2.0, n), alpha=1.5, damping=0.2,
+                     damping_exponent=0.25)
+    sol = simulate_line(line)
+    assert sol.terminal
+    for j in range(n - 1):
+        kinds = sol.event_kind[sol.event_contact == j]
+        for i in np.flatnonzero(kinds == EventKind.OPEN):
+            assert i > 0 and kinds[i - 1] == EventKind.UNLOAD
+    # the terminal state: no two neighbours approach
+    assert np.all(np.diff(sol.final_velocity) >= -1e-12)
+
+
+def test_the_elastic_limit():
+    n = 6
+    base = dict(mass=[1.0, 2.0, 0.5, 1.0, 1.5, 1.0], alpha=1.5, k=2)
+    elastic = simulate_line(Line.make(n, **base))
+    for eta in (1e-4, 1e-6):
+        damped = simulate_line(Line.make(n, damping=eta, damping_exponent=0.5, **base))
+        gap = np.abs(damped.final_velocity - elastic.final_velocity).max()
+        assert gap < 50 * eta
+        assert 0.0 < damped.dissipated_energy < 50 * eta
+    assert elastic.dissipated_energy == 0.0
+    assert not np.any(elastic.event_kind == EventKind.UNLOAD)
+
+
+def test_sensor_forces_are_the_damped_law_at_the_snapshots():
+    rng = np.random.default_rng(3)
+    n = 6
+    line = Line.make(n, mass=rng.uniform(0.5, 2.0, n), alpha=1.5, damping=0.4,
+                     damping_exponent=0.5, k=1)
+    dt = 0.25
+    times = np.arange(0.0, 12.0, dt)
+    sol = simulate_line(line, times, sensors=[2, 4], sensor_dt=dt)
+    from chainrun.solver.physics import contact_forces
+
+    forces = contact_forces(sol.positions, line.alpha, line.stiffness, v=sol.velocities,
+                            damping=line.damping, damping_exponent=line.damping_exponent)
+    m = times.size
+    for s, ball in enumerate((2, 4)):
+        np.testing.assert_allclose(sol.sensor_force[:m, s, 0], forces[:, ball - 2],
+                                   rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(sol.sensor_force[:m, s, 1], forces[:, ball - 1],
+                                   rtol=1e-9, atol=1e-12)
+    assert np.all(sol.sensor_force >= 0.0)
+    # the damping's force is there: the elastic law alone differs while a contact moves
+    elastic = contact_forces(sol.positions, line.alpha, line.stiffness)
+    assert np.abs(elastic - forces).max() > 1e-3
