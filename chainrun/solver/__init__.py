@@ -29,7 +29,17 @@ and there is no gap, wall or force)::
     m_n x_n'' = F_{n-1} - F_n + f_n,   F_j = kappa_j (x_j - x_{j+1} - g_j)_+^alpha_j
 
 Contact j joins balls j and j+1 (0-based here: contact j joins balls j and j+1 of the
-arrays); a wall is a contact with a ball of infinite mass at rest.
+arrays); a wall is a contact with a ball of infinite mass at rest. A damped contact
+(``Line.damping`` eta_j > 0, exponent beta_j) carries, while compressed (d_j > 0),
+
+    F_j = max(0, kappa_j d_j^alpha_j + eta_j d_j^beta_j d_j')
+
+held at 0 from where it would pull (``EventKind.UNLOAD``: the collision ends there,
+before the compression is gone) until it pushes again (``RELOAD``) or the compression
+goes (``OPEN``). Energy is then ``kinetic + contact + dissipated``, the dissipated
+energy (``Solution.dissipated``) integrated along the run: the damping's power
+eta d^beta d'^2 by each step's quadrature, and the elastic energy a contact held at 0
+still stores as it goes, exactly.
 """
 
 from __future__ import annotations
