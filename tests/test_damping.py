@@ -219,3 +219,19 @@ def test_sensor_forces_are_the_damped_law_at_the_snapshots():
     # the damping's force is there: the elastic law alone differs while a contact moves
     elastic = contact_forces(sol.positions, line.alpha, line.stiffness)[:m]
     assert np.abs(elastic - forces).max() > 1e-3
+
+
+@pytest.mark.parametrize("beta,alpha", [(0.0, 1.0), (0.5, 1.5)])
+def test_a_heavily_damped_line_ends_moving_as_one_body(alpha, beta):
+    """The terminal rule with damping: no contact pushes and no pair approaches. Under
+    heavy damping every collision is nearly perfectly inelastic, and the line ends
+    moving nearly as one body, with the momentum it was given."""
+    n, k = 10, 2
+    sol = simulate_line(Line.make(n, alpha=alpha, damping=1e3, damping_exponent=beta, k=k))
+    assert sol.terminal
+    v = sol.final_velocity
+    assert np.all(np.diff(v) >= 0.0)
+    assert v.sum() == pytest.approx(k, rel=1e-12)
+    assert np.ptp(v) < 1e-2 * v.mean()
+    # nearly all of the impact energy went into the damping
+    assert sol.dissipated_energy == pytest.approx(0.5 * k - 0.5 * k * k / n, rel=1e-3)
