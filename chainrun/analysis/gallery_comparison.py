@@ -143,7 +143,7 @@ GALLERY_PRINTED: tuple[tuple[str, Printed], ...] = (
     _p("dimer.porter", "dimer", "Porter, Daraio et al. (2008), steel/PTFE dimers",
        "speed and width of the dimer's solitary wave", "", "",
        note="Not at hand: only the abstract could be read, and it prints no number. "
-            "chainrun does not model this case yet (no row value)."),
+            "The gallery runs no steel/PTFE chain, so there is no value beside it."),
     # --------------------------------------------------------------------------- taper
     _p("taper.nakagawa", "taper", "Nakagawa et al., Granular Matter (2003); Sen et al.",
        "peak force transmitted through a forward taper (ratio 0.90), last / first", "",
