@@ -3,16 +3,17 @@
 
 PYTHON ?= python3
 VENV   := .venv
-BIN    := $(VENV)/bin
+BIN    ?= $(VENV)/bin
 STAMP  := $(VENV)/.chainrun-installed
 CONFIGS := $(wildcard configs/*.toml configs/*.yaml)
 
-.PHONY: test figures simulate clean-results help
+.PHONY: test figures gallery simulate clean-results help
 
 help:
 	@echo "make test     install into .venv (if needed) and run the test suite"
 	@echo "make figures  every figure, table and number of the paper into results/"
 	@echo "              (make -j2 figures runs independent experiments side by side)"
+	@echo "make gallery  the published experiments beyond the paper (docs/gallery/) into results/"
 
 # The solver is compiled for this machine once, here, into its cache (about 35 s on two
 # cores): a first `chainrun simulate` then starts at once.
@@ -71,7 +72,7 @@ $(ARTEFACT_RULES): chainrun/artefacts.py $(STAMP)
 	$(CHAINRUN) plot --list --format make --results $(RESULTS) > $@.partial
 	mv $@.partial $@
 
-ifneq ($(filter figures $(RESULTS)/%,$(MAKECMDGOALS)),)
+ifneq ($(filter figures gallery $(RESULTS)/%,$(MAKECMDGOALS)),)
 include $(ARTEFACT_RULES)
 endif
 
@@ -85,6 +86,12 @@ $(RESULTS)/analysis/%.h5: $(ANALYSIS_SOURCES) | $(STAMP)
 	$(CHAINRUN) analyze $* --results $(RESULTS)
 
 figures: $(STAMP) $(ARTEFACT_OUTPUTS)
+
+# ---- make gallery: the same machinery for the experiments beyond the paper -------------
+# configs/gallery/<name>.toml -> $(RESULTS)/runs/gallery/<name>/ (the pattern rule above),
+# analyses $(RESULTS)/analysis/gallery-*.h5, figures $(RESULTS)/gallery/*.png and .pdf,
+# and $(RESULTS)/gallery-comparison.md, .csv. The registry is GALLERY in chainrun/artefacts.py.
+gallery: $(STAMP) $(GALLERY_OUTPUTS)
 
 clean-results:
 	rm -rf results

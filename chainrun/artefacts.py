@@ -24,8 +24,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = [
+    "ALL",
     "ARTEFACTS",
     "Artefact",
+    "GALLERY",
     "analysis_path",
     "experiments",
     "get",
@@ -142,7 +144,57 @@ ARTEFACTS = ARTEFACTS + (
              outputs=("paper-comparison.csv", "paper-comparison.md")),
 )
 
-_BY_NAME = {a.name: a for a in ARTEFACTS}
+
+def _gallery(name: str, title: str, experiments: tuple[str, ...]) -> Artefact:
+    """A gallery item: runs of ``configs/gallery/<experiment>.toml``, the recipe
+    ``gallery:<name>`` and one figure (of one or more panels) drawn by
+    ``chainrun.plotting.gallery`` into ``gallery/<name>.png`` and ``.pdf``."""
+    return Artefact(name=f"gallery-{name}", kind="figure", title=title,
+                    experiments=tuple(f"gallery/{e}" for e in experiments), needs=(),
+                    analysis=f"gallery:{name.replace('-', '_')}", plot="gallery",
+                    outputs=(f"gallery/{name}.png", f"gallery/{name}.pdf"))
+
+
+_DIMER_RATIOS = ("0.10", "0.15", "0.20", "0.25", "0.30", "0.33", "0.34", "0.35", "0.36",
+                 "0.37", "0.40", "0.45", "0.50", "0.55", "0.60", "0.65", "0.70", "0.80",
+                 "0.90", "1.00")
+_TAPERS = ("0.90", "0.95", "0.98", "1.02", "1.05", "1.10")
+_IMPURITIES = ("0.25", "0.50", "2.00", "4.00")
+
+#: Beyond the paper: published experiments and theories that followed it, built by
+#: ``make gallery`` (``docs/gallery/``). Their runs live under ``runs/gallery/``.
+GALLERY: tuple[Artefact, ...] = (
+    _gallery("solitary", "Solitary waves in a steel chain (Coste et al. 1997): speed against "
+             "peak force, with and without precompression, beside Nesterenko's laws",
+             ("solitary-prefactor", "solitary-steel", "solitary-precompressed")),
+    _gallery("cradle", "Newton's cradle of five 25.4 mm steel balls: Table 1 in SI, and how "
+             "far the 'stationary' balls move in the first second", ("cradle",)),
+    _gallery("wall", "A column of beads hitting a wall (Falcon et al. 1998): effective "
+             "restitution and contact duration against N and impact speed; K beads on K "
+             "resting on a wall",
+             ("wall-column", "wall-column-speed") + tuple(f"wall-2k-{k}" for k in range(1, 5))),
+    _gallery("head-on", "A line struck at both ends, and a light or heavy impurity: what "
+             "crosses and what reflects",
+             ("head-on", "head-on-unequal") + tuple(f"impurity-{m}" for m in _IMPURITIES)),
+    _gallery("taper", "Tapered chains: transmitted force and energy against the taper ratio, "
+             "forward and backward", tuple(f"taper-{q}" for q in _TAPERS)),
+    _gallery("dimer", "Dimer chains: the mass ratios at which a solitary wave travels "
+             "without radiating", tuple(f"dimer-{r}" for r in _DIMER_RATIOS)),
+)
+
+#: The gallery's comparison of published numbers with chainrun's, after every item.
+GALLERY = GALLERY + (
+    Artefact(name="gallery-comparison", kind="comparison",
+             title="Every published number of the gallery beside the value chainrun computes",
+             experiments=(), needs=tuple(a.name for a in GALLERY),
+             analysis="gallery_comparison:gallery_comparison", plot="gallery_comparison",
+             outputs=("gallery-comparison.csv", "gallery-comparison.md")),
+)
+
+#: The paper's artefacts, then the gallery's.
+ALL: tuple[Artefact, ...] = ARTEFACTS + GALLERY
+
+_BY_NAME = {a.name: a for a in ALL}
 
 
 def get(name: str) -> Artefact:
@@ -159,10 +211,11 @@ def get(name: str) -> Artefact:
         raise KeyError(f"no artefact {name!r} (known: {', '.join(_BY_NAME)})") from None
 
 
-def experiments() -> list[str]:
-    """Every experiment any artefact reads, each once, in registry order."""
+def experiments(group: tuple[Artefact, ...] = ARTEFACTS) -> list[str]:
+    """Every experiment any artefact of ``group`` (the paper's by default) reads, each
+    once, in registry order."""
     seen: dict[str, None] = {}
-    for artefact in ARTEFACTS:
+    for artefact in group:
         for experiment in artefact.experiments:
             seen.setdefault(experiment, None)
     return list(seen)
@@ -191,8 +244,9 @@ def output_paths(artefact: Artefact, results="results") -> list[Path]:
 def make_rules(results: str = "results", configs: str = "configs") -> str:
     """The registry as GNU make rules (``chainrun plot --list --format make``).
 
-    Defines ``ARTEFACT_OUTPUTS`` (every output file), ``ARTEFACT_ANALYSES`` and
-    ``ARTEFACT_RUNS``, the prerequisites of each analysis file (its runs, the analysis
+    Defines ``ARTEFACT_OUTPUTS`` (every output file of the paper), ``ARTEFACT_ANALYSES``
+    and ``ARTEFACT_RUNS``, the same for the gallery (``GALLERY_OUTPUTS``,
+    ``GALLERY_ANALYSES``, ``GALLERY_RUNS``), the prerequisites of each analysis file (its runs, the analysis
     files it reads, its recipe's module), and one grouped rule per artefact that draws
     its outputs. The Makefile supplies the pattern rules that simulate a config and
     analyse an artefact (with the analysis code every recipe shares), and the variables
@@ -207,17 +261,25 @@ def make_rules(results: str = "results", configs: str = "configs") -> str:
                                            for a in ARTEFACTS),
         "ARTEFACT_OUTPUTS := " + " ".join(str(p) for a in ARTEFACTS
                                           for p in output_paths(a, results)),
+        "GALLERY_RUNS := " + " ".join(str(index_path(e, results))
+                                      for e in experiments(GALLERY)),
+        "GALLERY_ANALYSES := " + " ".join(str(analysis_path(a.name, results))
+                                          for a in GALLERY),
+        "GALLERY_OUTPUTS := " + " ".join(str(p) for a in GALLERY
+                                         for p in output_paths(a, results)),
         "",
     ]
-    for a in ARTEFACTS:
+    for a in ALL:
         needs = [str(index_path(e, results)) for e in a.experiments]
         needs += [str(analysis_path(n, results)) for n in a.needs]
         needs.append(f"chainrun/analysis/{a.analysis.partition(':')[0]}.py")
         if a.kind == "comparison":   # its catalogue quotes every recipe's values
             needs.append("$(wildcard chainrun/analysis/*.py)")
+        elif a in GALLERY:           # the gallery's measurements and theory
+            needs.append("chainrun/analysis/gallery_measure.py")
         lines.append(f"{analysis_path(a.name, results)}: {' '.join(needs)}")
     lines.append("")
-    for a in ARTEFACTS:
+    for a in ALL:
         if a.plot is None:
             continue
         outs = " ".join(str(p) for p in output_paths(a, results))

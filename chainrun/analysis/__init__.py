@@ -67,7 +67,8 @@ class Inputs:
             for entry in read_index(index):
                 path = index.parent / entry["file"]
                 run = read_run(path)
-                if not run.terminal:
+                stopped = run.parameters.get("t_end") is not None and run.outcome == "stop_time"
+                if not (run.terminal or stopped):   # a stop at its own t_end is asked for
                     raise ChainrunError(f"{path}: run did not reach its terminal state "
                                         f"({run.message})")
                 self.read.append(dict(kind="run", name=f"{experiment}/{entry['run_id']}",

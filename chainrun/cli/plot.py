@@ -76,10 +76,10 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
             rows = [dict(name=a.name, kind=a.kind, title=a.title,
                          experiments=list(a.experiments), needs=list(a.needs),
                          outputs=[str(p) for p in artefacts.output_paths(a, results)])
-                    for a in artefacts.ARTEFACTS]
+                    for a in artefacts.ALL]
             click.echo(json.dumps(rows, indent=2))
         else:
-            for a in artefacts.ARTEFACTS:
+            for a in artefacts.ALL:
                 outputs = ", ".join(str(p) for p in artefacts.output_paths(a, results))
                 click.echo(f"{a.name:17s} {a.kind:10s} {a.title}")
                 inputs = ", ".join([f"configs/{e}.toml" for e in a.experiments] + list(a.needs))
@@ -88,7 +88,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
         return
     from chainrun.plotting import render, render_run, render_sweep
 
-    known = {a.name for a in artefacts.ARTEFACTS}
+    known = {a.name for a in artefacts.ALL}
     if names and all(name not in known and Path(name).exists() for name in names):
         views = None if what is None else [v.strip() for v in what.split(",") if v.strip()]
         try:

@@ -13,6 +13,8 @@ COLUMNS = ("key", "where", "quantity", "paper", "computed", "agrees", "rule", "n
 
 
 def _computed(value: float) -> str:
+    if value != value:   # NaN: no value
+        return "—"
     if float(value).is_integer() and abs(value) < 1e6:
         return str(int(value))
     return f"{value:.6g}"

@@ -1,0 +1,361 @@
+"""The gallery's recipes: one per item of ``make gallery`` (``docs/gallery/``).
+
+This module owns what each gallery item derives from its runs: the arrays its figure
+draws (as series of the analysis file, with the panel they belong to in ``panel``) and
+the named values the gallery's comparison (``chainrun.analysis.gallery_comparison``)
+quotes. The measurements themselves are in ``chainrun.analysis.gallery_measure``.
+
+Items: ``solitary`` (Coste et al. 1997; Nesterenko's laws), ``cradle`` (Newton's cradle
+in SI), ``wall`` (Falcon et al. 1998; N = 2K on a wall), ``head_on`` (a line struck at
+both ends; an impurity), ``taper`` (tapered chains), ``dimer`` (dimer chains).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from chainrun.analysis import Inputs, Result
+from chainrun.analysis import gallery_measure as gm
+from chainrun.materials import material
+
+__all__ = ["cradle", "dimer", "head_on", "solitary", "taper", "wall"]
+
+
+def _swept(run, key: str):
+    return run.parameters["overrides"][key]
+
+
+def _first_pulses(run, side: int = 1, baseline: float | None = None):
+    """Peak time and force of the first pulse at each sensor (its contact on ``side``:
+    0 towards ball 1, 1 away from it)."""
+    out = [gm.first_pulse(run.sensor_time, run.sensor_force[:, s, side], baseline)
+           for s in range(run.sensor_balls.size)]
+    return np.array([o[0] for o in out]), np.array([o[1] for o in out])
+
+
+def _bead(run, name: str):
+    """The material and diameter of a uniform SI chain (from its config)."""
+    chain = run.parameters["config_resolved"]["chain"]
+    d = _swept(run, "chain.diameter") if "chain.diameter" in run.parameters["overrides"] \
+        else chain["diameter"]
+    return material(name), float(d)
+
+
+# --------------------------------------------------------------------------- solitary
+def solitary(inputs: Inputs) -> Result:
+    """Solitary waves: the discrete chain's prefactor, steel chains with and without
+    precompression, beside Nesterenko's long-wave laws."""
+    r = Result()
+    r.setting("measure", "first pulse peak of each sensor's contact force away from ball "
+                         "1 (parabola through the samples); speed: slope of ball against "
+                         "peak time")
+    # The prefactor: one wave in the paper's units.
+    run = inputs.run("gallery/solitary-prefactor")
+    balls = run.sensor_balls
+    t, f = _first_pulses(run)
+    c = gm.wave_speed(balls, t)
+    F = float(np.mean(f))
+    half = balls.size // 2 + 1
+    c_a, c_b = gm.wave_speed(balls[:half], t[:half]), gm.wave_speed(balls[half - 1:],
+                                                                     t[half - 1:])
+    ratio = c / F ** (1.0 / 6.0)
+    r.value("c", c, "speed of the settled solitary wave, balls per unit time (paper units)")
+    r.value("F", F, "its peak contact force (paper units), mean over the sensors")
+    r.value("F_spread", float(np.ptp(f) / F), "relative spread of the peak force between "
+                                              "balls 40 and 160")
+    r.value("c_spread", abs(c_a - c_b) / c, "relative difference of the speeds over balls "
+                                           "40-100 and 100-160")
+    r.value("ratio", ratio, "c / F^(1/6) of the discrete chain (paper units)")
+    r.value("prefactor_discrete", ratio * gm.PAPER_TO_SI,
+            "the discrete chain's prefactor C in V = C (4E^2 F/(d^2 rho^3 (1-nu^2)^2))^(1/6)")
+    r.value("prefactor_long_wave", gm.long_wave_prefactor(),
+            "Nesterenko's long-wave prefactor, peak force by the leading term A^(3/2)")
+    r.value("prefactor_long_wave_51", gm.long_wave_prefactor("5.1"),
+            "the same with the peak force by (5.1), 0.9 A^(3/2)")
+    r.value("prefactor_sound", gm.long_wave_sound_prefactor(),
+            "prefactor of the sound speed under a static force F0")
+    r.value("prefactor_discrete_over_long_wave", ratio * gm.PAPER_TO_SI
+            / gm.long_wave_prefactor(), "discrete over long-wave prefactor")
+    r.value("speed_check_0841", ratio * 0.640 ** (1.0 / 6.0),
+            "c at the paper's peak force 0.640 by the measured ratio")
+
+    # Steel without precompression.
+    law = gm.long_wave_prefactor()
+    errors = []
+    F_si, V_si = [], []
+    for run in inputs.runs("gallery/solitary-steel"):
+        mat, d = _bead(run, "chrome_steel")
+        t, f = _first_pulses(run)
+        V = gm.wave_speed(run.sensor_balls, t) * d
+        Fm = float(np.mean(f))
+        group = float(gm.daraio_group(Fm, mat.young, mat.poisson, mat.density, d))
+        F_si.append(Fm)
+        V_si.append(V)
+        errors.append(V / (law * group) - 1.0)
+        r.value(f"steel_V_{_swept(run, 'chain.speed'):g}", V,
+                f"wave speed (m/s), striker at {_swept(run, 'chain.speed'):g} m/s")
+        r.value(f"steel_F_{_swept(run, 'chain.speed'):g}", Fm,
+                f"peak contact force (N), striker at {_swept(run, 'chain.speed'):g} m/s")
+        r.value(f"steel_C_{_swept(run, 'chain.speed'):g}", V / group,
+                "measured prefactor V / (4E^2F/(d^2 rho^3 (1-nu^2)^2))^(1/6)")
+    order = np.argsort(F_si)
+    F_si, V_si = np.array(F_si)[order], np.array(V_si)[order]
+    mat, d = material("chrome_steel"), 0.008
+    grid = np.geomspace(F_si[0] / 2, F_si[-1] * 2, 60)
+    g = gm.daraio_group(grid, mat.young, mat.poisson, mat.density, d)
+    r.series("speed", "chainrun", F_si, V_si, label="chainrun", role="data", panel=0)
+    r.series("speed", "discrete", grid, r.values["prefactor_discrete"] * g,
+             label=f"{r.values['prefactor_discrete']:.4f} (discrete chain)", role="theory",
+             panel=0)
+    r.series("speed", "nesterenko", grid, law * g, label="0.6802 (long wave)",
+             role="theory", panel=0)
+    r.value("steel_law_error_mean", float(np.mean(errors)),
+            "mean relative excess of the steel chain's speed over the 0.6802 law")
+
+    # Steel with precompression: V / c0 against F_m / F0, every F0 on one curve.
+    fr_all = []
+    dev = []
+    for run in inputs.runs("gallery/solitary-precompressed"):
+        mat, d = _bead(run, "chrome_steel")
+        F0 = float(_swept(run, "chain.precompression"))
+        t, f = _first_pulses(run, baseline=F0)
+        V = gm.wave_speed(run.sensor_balls, t) * d
+        Fm = float(np.mean(f))
+        c0 = gm.long_wave_sound_prefactor() * float(
+            gm.daraio_group(F0, mat.young, mat.poisson, mat.density, d))
+        fr = Fm / F0
+        theory = float(gm.nesterenko_precompressed_ratio(fr))
+        fr_all.append((F0, fr, V / c0, theory))
+        dev.append(V / c0 / theory - 1.0)
+        key = f"pre_{F0:g}_{_swept(run, 'chain.speed'):g}"
+        r.value(f"{key}_fr", fr, f"F_m / F0, F0 = {F0:g} N, striker "
+                                 f"{_swept(run, 'chain.speed'):g} m/s")
+        r.value(f"{key}_V", V, "wave speed (m/s)")
+        r.value(f"{key}_ratio", V / c0, "V / c0")
+    for k, F0 in enumerate(sorted({x[0] for x in fr_all})):
+        pts = sorted((x[1], x[2]) for x in fr_all if x[0] == F0)
+        r.series("precompressed", f"F0={F0:g}", [p[0] for p in pts], [p[1] for p in pts],
+                 label=f"$F_0$ = {F0:g} N", role="data", panel=1, marker=k)
+    frs = np.geomspace(1.02, max(x[1] for x in fr_all) * 1.5, 80)
+    r.series("precompressed", "nesterenko", frs, gm.nesterenko_precompressed_ratio(frs),
+             label="long wave", role="theory", panel=1)
+    r.value("pre_dev_max", float(np.max(np.abs(dev))),
+            "largest relative deviation of V/c0 from the long-wave law")
+    r.value("pre_dev_min", float(np.min(np.abs(dev))),
+            "smallest relative deviation of V/c0 from the long-wave law")
+    return r
+
+
+# ----------------------------------------------------------------------------- cradle
+def cradle(inputs: Inputs) -> Result:
+    """Newton's cradle in SI: Table 1 at 0.5 m/s and the drift in the first second."""
+    r = Result()
+    r.setting("drift_time", 1.0)
+    for run in inputs.runs("gallery/cradle"):
+        k = int(_swept(run, "chain.k"))
+        speed = float(run.model["velocity"][0])
+        v = run.final_velocity
+        x = gm.drift(run.final_position, v, run.end_time, 1.0) * 1e3
+        for n in range(1, 6):
+            r.value(f"v_{n}_K{k}", v[n - 1], f"final velocity (m/s) of ball {n}, K = {k}")
+            r.value(f"scaled_{n}_K{k}", v[n - 1] / speed,
+                    f"final velocity of ball {n} over the impact speed, K = {k}")
+            r.value(f"drift_mm_{n}_K{k}", x[n - 1],
+                    f"displacement (mm) of ball {n} at t = 1 s, K = {k}")
+        r.value(f"contact_us_K{k}", run.end_time * 1e6,
+                f"time (microseconds) from first contact to the last, K = {k}")
+        r.series("drift", f"K={k}", np.arange(1, 6), x, label=f"K = {k}", role="data",
+                 panel=0, marker=k - 1)
+    r.value("speed", speed, "impact speed (m/s)")
+    return r
+
+
+# ------------------------------------------------------------------------------- wall
+def _wall_release(run) -> tuple[float, int]:
+    """The last time the wall (contact N - 1) lets go, and how many times it does."""
+    wall = run.n - 1
+    mask = (run.event_contact == wall) & (run.event_kind < 0)
+    times = run.event_time[mask]
+    return (float(times.max()) if times.size else float("nan")), int(times.size)
+
+
+def wall(inputs: Inputs) -> Result:
+    """A column hitting a wall, and K balls striking K resting on a wall."""
+    r = Result()
+    tau = gm.hertz_contact_time_factor()
+    r.value("hertz_tau", tau, "Hertz's contact time factor: t_c = tau (m^2/(kappa^2 v))^(1/5)")
+    ns, es, ds = [], [], []
+    for run in inputs.runs("gallery/wall-column"):
+        n = run.n
+        m = run.model["mass"]
+        e = gm.restitution(m, run.model["velocity"], run.final_velocity)
+        release, count = _wall_release(run)
+        ns.append(n)
+        es.append(e)
+        ds.append(release)
+        r.value(f"column_e_{n}", e, f"effective restitution, column of {n}")
+        r.value(f"column_duration_us_{n}", release * 1e6,
+                f"wall contact duration (microseconds), column of {n}")
+        r.value(f"column_wall_contacts_{n}", count, f"separate wall contacts, column of {n}")
+        if n == 1:
+            v = float(run.model["velocity"][0])
+            kappa = run.model["walls"]["right"]["stiffness"]
+            t_c = tau * (m[0] ** 2 / (kappa**2 * v)) ** 0.2
+            r.value("hertz_t_c_us", t_c * 1e6,
+                    "Hertz's contact time of one bead on the wall (microseconds)")
+            r.value("hertz_rel_error", abs(release / t_c - 1.0),
+                    "relative difference of chainrun's contact time from Hertz's")
+    order = np.argsort(ns)
+    ns, es, ds = np.array(ns)[order], np.array(es)[order], np.array(ds)[order]
+    r.series("restitution", "column", ns, es, label="column of N, 0.2 m/s", role="data",
+             panel=0, marker=0)
+    r.series("duration", "column", ns, ds / ds[0], label="column of N, 0.2 m/s",
+             role="data", panel=1, marker=0)
+    speeds, dur, ev = [], [], []
+    for run in inputs.runs("gallery/wall-column-speed"):
+        v = float(_swept(run, "chain.speed"))
+        speeds.append(v)
+        dur.append(_wall_release(run)[0])
+        ev.append(gm.restitution(run.model["mass"], run.model["velocity"],
+                                 run.final_velocity))
+    speeds, dur, ev = (np.array(a)[np.argsort(speeds)] for a in (speeds, dur, ev))
+    slope = float(np.polyfit(np.log(speeds), np.log(dur), 1)[0])
+    r.value("speed_slope", slope, "log-log slope of the contact duration of a column of 8 "
+                                  "against the impact speed")
+    r.value("speed_e_spread", float(np.ptp(ev)), "spread of the restitution of a column of "
+                                                 "8 over impact speeds 0.05-3.2 m/s")
+    r.value("speed_e", float(np.mean(ev)), "restitution of a column of 8, mean over speeds")
+    for k in range(1, 5):
+        run = inputs.run(f"gallery/wall-2k-{k}")
+        m, v0, v = run.model["mass"], run.model["velocity"], run.final_velocity
+        e = gm.restitution(m, v0, v)
+        r.value(f"2k_e_{k}", e, f"effective restitution, {k} striking {k} on a wall")
+        r.value(f"2k_strikers_{k}", float(np.sum(v[:k]) / k),
+                f"mean final velocity of the {k} strikers")
+        r.value(f"2k_rest_{k}", float(np.sum(v[k:]) / k),
+                f"mean final velocity of the {k} balls that rested on the wall")
+        r.value(f"2k_release_{k}", _wall_release(run)[0],
+                f"time the wall lets go (paper units), K = {k}")
+        r.value(f"2k_wall_contacts_{k}", _wall_release(run)[1],
+                f"separate wall contacts, K = {k}")
+    r.series("restitution", "2k", np.arange(2, 9, 2),
+             [r.values[f"2k_e_{k}"] for k in range(1, 5)], label="K on K resting on the wall",
+             role="data", panel=0, marker=1)
+    return r
+
+
+# ---------------------------------------------------------------------------- head-on
+def head_on(inputs: Inputs) -> Result:
+    """A line struck at both ends; a light or heavy impurity in the middle."""
+    r = Result()
+    run = inputs.run("gallery/head-on")
+    v = run.final_velocity
+    n = run.n
+    r.value("symmetry_error", float(np.max(np.abs(v + v[::-1]))),
+            "largest |v_n + v_(N+1-n)| (0 by symmetry)")
+    r.value("end_speed", float(v[-1]), "final velocity of ball N (the one struck at -1)")
+    r.value("end_energy_share", float((v[0] ** 2 + v[-1] ** 2) / 2.0),
+            "share of the impact energy carried away by the two end balls")
+    r.value("momentum_error", float(abs(np.sum(v))), "|total momentum| (0)")
+    r.value("moving_balls", int(np.sum(np.abs(v) > 0.01)),
+            "balls leaving faster than 1% of the impact speed")
+    r.series("head_on", "equal", np.arange(1, n + 1), v, label="±1", role="data",
+             panel=0, marker=0)
+    run = inputs.run("gallery/head-on-unequal")
+    u = run.final_velocity
+    r.value("unequal_first", float(u[0]), "final velocity of ball 1, strikers +1 and -0.5")
+    r.value("unequal_last", float(u[-1]), "final velocity of ball N, strikers +1 and -0.5")
+    r.value("unequal_momentum", float(np.sum(u)), "total momentum (0.5)")
+    r.series("head_on", "unequal", np.arange(1, n + 1), u, label="+1 and −0.5", role="data",
+             panel=0, marker=1)
+    masses, refl, trans, two = [], [], [], []
+    for experiment in (e for e in inputs.artefact.experiments if "impurity" in e):
+        run = inputs.run(experiment)
+        m = run.model["mass"]
+        at = int(np.argmax(np.abs(m - 1.0))) + 1
+        before, on, after = gm.energy_split(m, run.final_velocity, at)
+        e0 = 0.5
+        mu = float(m[at - 1])
+        masses.append(mu)
+        refl.append(before / e0)
+        trans.append((on + after) / e0)
+        two.append(4.0 * mu / (1.0 + mu) ** 2)
+        r.value(f"impurity_{mu:g}_reflected", before / e0,
+                f"energy share left before the impurity of mass {mu:g}")
+        r.value(f"impurity_{mu:g}_transmitted", (on + after) / e0,
+                f"energy share in the impurity of mass {mu:g} and beyond")
+        r.value(f"impurity_{mu:g}_two_ball", 4.0 * mu / (1.0 + mu) ** 2,
+                "energy share a ball of mass 1 gives a ball of this mass at rest")
+    mus = np.geomspace(0.2, 5.0, 60)
+    r.series("impurity", "transmitted", masses, trans, label="transmitted", role="data",
+             panel=1, marker=0)
+    r.series("impurity", "reflected", masses, refl, label="reflected", role="data",
+             panel=1, marker=1)
+    r.series("impurity", "two_ball", mus, 4.0 * mus / (1.0 + mus) ** 2,
+             label="two balls, $4\\mu/(1+\\mu)^2$", role="theory", panel=1)
+    return r
+
+
+# ------------------------------------------------------------------------------ taper
+def taper(inputs: Inputs) -> Result:
+    """Tapered chains: transmitted force and energy against the taper ratio."""
+    r = Result()
+    qs, force, energy = [], [], []
+    for experiment in inputs.artefact.experiments:
+        name = experiment.rsplit("-", 1)[1]
+        run = inputs.run(experiment)
+        q = float(name)
+        m = run.model["mass"]
+        first = float(run.sensor_force[:, 0, 0].max())   # contact 1 (balls 1-2)
+        last = float(run.sensor_force[:, 1, 1].max())    # contact 19 (balls 19-20)
+        e_in = 0.5 * m[0] * run.model["velocity"][0] ** 2
+        e_out = 0.5 * m[-1] * run.final_velocity[-1] ** 2
+        qs.append(q)
+        force.append(last / first)
+        energy.append(e_out / e_in)
+        r.value(f"force_ratio_{name}", last / first,
+                f"peak force of the last contact over the first, taper {name}")
+        r.value(f"energy_out_{name}", e_out / e_in,
+                f"kinetic energy of the last bead over the impact energy, taper {name}")
+        r.value(f"speed_out_{name}", float(run.final_velocity[-1] / run.model["velocity"][0]),
+                f"velocity of the last bead over the impact speed, taper {name}")
+    r.series("taper", "force", qs, force, label="last contact / first (peak force)",
+             role="data", panel=0, marker=0)
+    r.series("taper", "energy", qs, energy, label="energy of the last bead / impact",
+             role="data", panel=0, marker=1)
+    return r
+
+
+# ------------------------------------------------------------------------------ dimer
+def dimer(inputs: Inputs) -> Result:
+    """Dimer chains: the energy the wave leaves behind, against the mass ratio."""
+    r = Result()
+    lo, hi = 11, 40
+    r.setting("behind", f"balls {lo}-{hi}")
+    ratios, left = [], []
+    for experiment in inputs.artefact.experiments:
+        name = experiment.rsplit("-", 1)[1]
+        run = inputs.run(experiment)
+        m = run.model["mass"]
+        v = run.final_velocity
+        e = 0.5 * m[lo - 1:hi] * v[lo - 1:hi] ** 2
+        ratios.append(float(name))
+        left.append(float(e.sum() / 0.5))
+        r.value(f"left_{name}", left[-1], f"energy share left in balls {lo}-{hi}, "
+                                          f"mass ratio {name}")
+    ratios, left = np.array(ratios), np.array(left)
+    r.series("dimer", "left", ratios, left, label=f"energy left in balls {lo}-{hi}",
+             role="data", panel=0, marker=0)
+    # Local minima inside the scanned range, refined by a parabola in log(energy).
+    minima = [i for i in range(1, ratios.size - 1)
+              if left[i] < left[i - 1] and left[i] < left[i + 1]]
+    for j, i in enumerate(minima, start=1):
+        # Near a ratio where the tail vanishes its amplitude is linear in the distance to
+        # it, so the energy is a parabola there; through the three grid points around it.
+        p = np.polyfit(ratios[i - 1:i + 2], left[i - 1:i + 2], 2)
+        r.value(f"antiresonance_{j}", -p[1] / (2 * p[0]),
+                "mass ratio of a minimum of the energy left behind (parabola through the "
+                "three grid points around it)")
+        r.value(f"antiresonance_{j}_left", left[i], "energy share left at that grid point")
+    r.value("minima", len(minima), "local minima in the scanned ratios")
+    return r

@@ -1,0 +1,185 @@
+"""Measurements and closed forms for the gallery (``make gallery``, ``docs/gallery/``).
+
+This module owns the definitions the gallery's recipes (``chainrun.analysis.gallery``)
+use, as pure functions of arrays: the first pulse in a force trace, a wave's speed,
+Nesterenko's long-wave laws in SI units (with and without precompression) and the
+constants that turn the paper's units into them, the effective restitution of a line
+against a wall, the energy on each side of a ball, the drift of free balls, the elastic
+collision of two balls and Hertz's contact time.
+
+Conventions:
+
+- a *contact force* is that of one contact (between two beads, or a bead and a wall);
+  the *peak force* ``F_m`` of a wave is the largest contact force as it passes;
+- a wave's *speed* is the slope of the ball number against the time of its force peak
+  (balls per unit time; times the diameter for m/s);
+- the *effective restitution* of a line against a wall is the ratio of its centre-of-mass
+  velocity after and before, ``-sum(m v_final) / sum(m v_initial)``.
+
+References
+----------
+.. [1] V. F. Nesterenko, "Propagation of nonlinear compression pulses in granular
+   media", J. Appl. Mech. Tech. Phys. 24, 733-743 (1983); the long-wave solution as
+   given in section 5b of Hinch and Saint-Jean (1999).
+.. [2] C. Daraio, V. F. Nesterenko, E. B. Herbold and S. Jin, Phys. Rev. E 73, 026610
+   (2006): the laws in SI form, with the prefactors 0.6802 and 0.9314.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import integrate
+
+__all__ = [
+    "PAPER_TO_SI",
+    "daraio_group",
+    "drift",
+    "energy_split",
+    "first_pulse",
+    "hertz_contact_time_factor",
+    "long_wave_prefactor",
+    "long_wave_sound_prefactor",
+    "nesterenko_precompressed_ratio",
+    "parabola_peak",
+    "restitution",
+    "two_ball",
+    "wave_speed",
+]
+
+#: ``(6/pi)^(1/2) 3^(-1/3) 4^(-1/6)``: a speed ``C F^(1/6)`` in balls per unit time of the
+#: paper's units (F the peak force in the paper's units, identical Hertz spheres with
+#: ``k = E d^(1/2) / (3(1 - nu^2))`` and ``m = rho pi d^3 / 6``) is, in m/s,
+#: ``C * PAPER_TO_SI * (4 E^2 F / (d^2 rho^3 (1 - nu^2)^2))^(1/6)``.
+PAPER_TO_SI = math.sqrt(6.0 / math.pi) * 3.0 ** (-1.0 / 3.0) * 4.0 ** (-1.0 / 6.0)
+
+
+def long_wave_prefactor(force_law: str = "leading") -> float:
+    """Nesterenko's prefactor of ``V = C (4 E^2 F_m / (d^2 rho^3 (1-nu^2)^2))^(1/6)``.
+
+    In the paper's units the long-wave wave has speed ``c = (2/sqrt5) A^(1/4)``; its peak
+    force is ``A^(3/2)`` by the leading term of the force (``force_law="leading"``, the
+    identification Daraio et al. use, giving 0.6802) or ``0.9 A^(3/2)`` by the paper's
+    (5.1) (``"5.1"``), which raises the prefactor by ``0.9^(-1/6)``.
+    """
+    c = 2.0 / math.sqrt(5.0)
+    if force_law == "5.1":
+        c *= 0.9 ** (-1.0 / 6.0)
+    elif force_law != "leading":
+        raise ValueError(f"force_law must be 'leading' or '5.1', got {force_law!r}")
+    return c * PAPER_TO_SI
+
+
+def long_wave_sound_prefactor() -> float:
+    """The prefactor of the sound speed ``c0 = C (4 E^2 F0 / (d^2 rho^3 (1-nu^2)^2))^(1/6)``
+    of a chain under a static force F0: the linearised contact has stiffness
+    ``(3/2) k^(2/3) F0^(1/3)``, so in the paper's units ``c0 = sqrt(3/2) F0^(1/6)``."""
+    return math.sqrt(1.5) * PAPER_TO_SI
+
+
+def daraio_group(force, young, poisson, density, diameter):
+    """``(4 E^2 F / (d^2 rho^3 (1 - nu^2)^2))^(1/6)`` in m/s (SI inputs)."""
+    force = np.asarray(force, dtype=float)
+    return (4.0 * young**2 * force
+            / (diameter**2 * density**3 * (1.0 - poisson**2) ** 2)) ** (1.0 / 6.0)
+
+
+def nesterenko_precompressed_ratio(f_r):
+    """``V_s / c0`` of the long-wave solitary wave in a chain under static force F0, at
+    ``f_r = F_m / F0`` (F_m the wave's largest contact force, F0 included)::
+
+        V_s / c0 = (4/15 (3 + 2 f_r^(5/3) - 5 f_r^(2/3)))^(1/2) / (f_r^(2/3) - 1)
+
+    It tends to 1 as f_r -> 1 and to ``sqrt(8/15) f_r^(1/6)`` as f_r -> inf, where it
+    joins the law of the chain without precompression.
+    """
+    f = np.asarray(f_r, dtype=float)
+    return np.sqrt(4.0 / 15.0 * (3.0 + 2.0 * f ** (5.0 / 3.0) - 5.0 * f ** (2.0 / 3.0))) \
+        / (f ** (2.0 / 3.0) - 1.0)
+
+
+def parabola_peak(t, y, i: int) -> tuple[float, float]:
+    """The vertex of the parabola through samples ``i - 1, i, i + 1`` of equally spaced
+    ``(t, y)``: ``(t_peak, y_peak)``."""
+    y0, y1, y2 = float(y[i - 1]), float(y[i]), float(y[i + 1])
+    h = float(t[i + 1] - t[i])
+    denom = y0 - 2.0 * y1 + y2
+    if denom == 0.0:
+        return float(t[i]), y1
+    s = 0.5 * (y0 - y2) / denom
+    return float(t[i]) + s * h, y1 - 0.25 * (y0 - y2) * s
+
+
+def first_pulse(t, f, baseline: float | None = None) -> tuple[float, float]:
+    """Time and value of the peak of the first pulse of a force trace.
+
+    The first pulse is the first stretch where ``f`` is above half-way between its
+    baseline (``f[0]`` unless given: the static force of a precompressed chain) and its
+    largest value; its peak is refined by a parabola.
+
+    Parameters
+    ----------
+    t, f : ndarray, shape (T,)
+        Equally spaced sample times and the force at each.
+
+    Returns
+    -------
+    (float, float)
+        ``(t_peak, f_peak)``.
+    """
+    t = np.asarray(t, dtype=float)
+    f = np.asarray(f, dtype=float)
+    base = float(f[0]) if baseline is None else float(baseline)
+    level = base + 0.5 * (float(f.max()) - base)
+    above = np.flatnonzero(f > level)
+    if above.size == 0:
+        raise ValueError("no pulse in the trace")
+    start = int(above[0])
+    below = np.flatnonzero(f[start:] <= level)
+    stop = start + (int(below[0]) if below.size else f.size - start)
+    i = start + int(np.argmax(f[start:stop]))
+    if i == 0 or i == f.size - 1:
+        return float(t[i]), float(f[i])
+    return parabola_peak(t, f, i)
+
+
+def wave_speed(balls, times) -> float:
+    """Least-squares slope of ball number against the time the wave passes it."""
+    return float(np.polyfit(np.asarray(times, float), np.asarray(balls, float), 1)[0])
+
+
+def restitution(mass, v_initial, v_final) -> float:
+    """Effective restitution of a line against a wall: ``-sum(m v_final)/sum(m v_initial)``."""
+    m = np.asarray(mass, dtype=float)
+    return float(-np.sum(m * np.asarray(v_final, float)) / np.sum(m * np.asarray(v_initial,
+                                                                                float)))
+
+
+def energy_split(mass, v, at: int) -> tuple[float, float, float]:
+    """Kinetic energy of the balls before ball ``at`` (1-based), of it, and after it."""
+    e = 0.5 * np.asarray(mass, float) * np.asarray(v, float) ** 2
+    i = at - 1
+    return float(e[:i].sum()), float(e[i]), float(e[i + 1:].sum())
+
+
+def drift(final_position, final_velocity, end_time: float, t: float) -> np.ndarray:
+    """Displacements at time ``t >= end_time`` of balls in free flight after ``end_time``."""
+    return np.asarray(final_position, float) + np.asarray(final_velocity, float) * (t - end_time)
+
+
+def two_ball(m1: float, m2: float, v1: float = 1.0) -> tuple[float, float]:
+    """Velocities after an elastic collision of ``m1`` at ``v1`` with ``m2`` at rest."""
+    return (m1 - m2) / (m1 + m2) * v1, 2.0 * m1 / (m1 + m2) * v1
+
+
+def hertz_contact_time_factor() -> float:
+    """``tau`` of Hertz's contact time ``t_c = tau (m^2 / (kappa^2 v))^(1/5)`` of a ball of
+    mass m hitting a wall at v with ``F = kappa delta^(3/2)``.
+
+    The largest compression is ``delta_m = (5 m v^2 / (4 kappa))^(2/5)`` and the contact
+    lasts ``(2 delta_m / v) int_0^1 dx / sqrt(1 - x^(5/2))``.
+    """
+    integral, _ = integrate.quad(lambda x: 1.0 / math.sqrt(1.0 - x**2.5), 0.0, 1.0,
+                                 epsabs=1e-13, epsrel=1e-13, limit=200)
+    return 2.0 * integral * 1.25 ** 0.4

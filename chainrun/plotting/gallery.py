@@ -1,0 +1,72 @@
+"""The gallery's figures (``make gallery``): one module draws them all, in the paper's style.
+
+Each gallery analysis file (``chainrun.analysis.gallery``) holds its series under one or
+two groups; every series names its ``panel`` (0 or 1) and, for markers, the paper's
+symbol it takes (``marker``). ``draw(data)`` lays the panels out and labels the axes of
+each item; nothing is computed here.
+"""
+
+from __future__ import annotations
+
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
+
+from chainrun.plotting.common import MARKERS, draw_series, series_names
+
+__all__ = ["draw"]
+
+#: For each item: its panels, each (group, x label, y label, x scale, y scale).
+PANELS = {
+    "gallery-solitary": (
+        ("speed", r"peak contact force $F_m$ (N)", r"wave speed $V$ (m/s)", "log", "log"),
+        ("precompressed", r"$F_m / F_0$", r"$V / c_0$", "log", "linear"),
+    ),
+    "gallery-cradle": (
+        ("drift", r"ball $n$", r"displacement at $t$ = 1 s (mm)", "linear", "symlog"),
+    ),
+    "gallery-wall": (
+        ("restitution", r"number of beads $N$", r"effective restitution $e$", "linear",
+         "linear"),
+        ("duration", r"number of beads $N$", r"contact time / one bead's", "linear",
+         "linear"),
+    ),
+    "gallery-head-on": (
+        ("head_on", r"ball $n$", r"final velocity $\dot{x}_n(\infty)$", "linear", "linear"),
+        ("impurity", r"impurity mass $\mu$", "energy share", "log", "linear"),
+    ),
+    "gallery-taper": (
+        ("taper", r"taper ratio $q$ (diameter $d_{i+1}/d_i$)", "transmitted / incident",
+         "linear", "log"),
+    ),
+    "gallery-dimer": (
+        ("dimer", r"mass ratio $m_2/m_1$", "energy share left behind", "linear", "log"),
+    ),
+}
+
+
+def draw(data) -> Figure:
+    panels = PANELS[data.name]
+    figure = Figure(figsize=(4.8 * len(panels), 3.6))
+    for i, (group, xlabel, ylabel, xscale, yscale) in enumerate(panels):
+        ax = figure.add_subplot(1, len(panels), i + 1)
+        for name in series_names(data, group=group):
+            attrs = data.attrs[f"{group}/{name}"]
+            if attrs.get("role") == "data":
+                style = dict(MARKERS[int(attrs.get("marker", 0)) % len(MARKERS)])
+                style["linestyle"] = "none" if group in ("speed", "precompressed",
+                                                         "impurity") else ":"
+            else:
+                style = dict(linestyle="--" if "nesterenko" in name or "two" in name
+                             else "-")
+            draw_series(ax, data, name, group=group, **style)
+        ax.set_xscale(xscale)
+        if xscale == "log":
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        if yscale == "symlog":
+            ax.set_yscale("symlog", linthresh=1.0)
+        else:
+            ax.set_yscale(yscale)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.legend(loc="best")
+    return figure

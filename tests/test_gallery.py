@@ -1,0 +1,155 @@
+"""The gallery (``make gallery``): its registry, its measurements against closed forms
+and independent computations, and a smoke run of one item's pipeline."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy import special
+
+import chainrun
+from chainrun import artefacts
+from chainrun.analysis import gallery_measure as gm
+from chainrun.analysis import recipe
+from chainrun.cli import main
+from chainrun.config import load_experiment
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ----------------------------------------------------------------------- the registry
+def test_every_gallery_config_is_read_and_every_experiment_has_one():
+    used = set(artefacts.experiments(artefacts.GALLERY))
+    files = {f"gallery/{p.stem}" for p in (ROOT / "configs" / "gallery").glob("*.toml")}
+    assert used == files
+    for experiment in used:
+        spec = load_experiment(ROOT / "configs" / f"{experiment}.toml")
+        assert f"gallery/{spec.name}" == experiment
+
+
+def test_gallery_artefacts_have_recipes_modules_and_outputs():
+    for a in artefacts.GALLERY:
+        assert a.name.startswith("gallery-")
+        assert callable(recipe(a))
+        assert all(o.startswith(("gallery/", "gallery-comparison.")) for o in a.outputs)
+    assert artefacts.GALLERY[-1].needs == tuple(a.name for a in artefacts.GALLERY[:-1])
+    assert not set(artefacts.ARTEFACTS) & set(artefacts.GALLERY)   # make figures unchanged
+
+
+def test_make_rules_list_the_gallery_apart():
+    rules = artefacts.make_rules(results="R").splitlines()
+    paper = next(l for l in rules if l.startswith("ARTEFACT_OUTPUTS :="))
+    gallery = next(l for l in rules if l.startswith("GALLERY_OUTPUTS :="))
+    assert "gallery" not in paper
+    assert "R/gallery/solitary.png" in gallery and "R/gallery-comparison.md" in gallery
+    line = next(l for l in rules if l.startswith("R/analysis/gallery-dimer.h5:"))
+    assert "R/runs/gallery/dimer-0.35/index.h5" in line
+    assert "chainrun/analysis/gallery_measure.py" in line
+
+
+# ------------------------------------------------------------- closed forms and limits
+def test_long_wave_prefactors_are_one_law():
+    # The precompressed law tends to the unprecompressed one: c0 sqrt(8/15) f^(1/6).
+    assert gm.long_wave_sound_prefactor() * math.sqrt(8 / 15) == pytest.approx(
+        gm.long_wave_prefactor(), rel=1e-14)
+    f = 1e12
+    assert gm.nesterenko_precompressed_ratio(f) == pytest.approx(
+        math.sqrt(8 / 15) * f ** (1 / 6), rel=1e-3)
+    assert gm.nesterenko_precompressed_ratio(1 + 1e-4) == pytest.approx(1.0, abs=1e-4)
+    assert gm.long_wave_prefactor("5.1") / gm.long_wave_prefactor() == pytest.approx(
+        0.9 ** (-1 / 6))
+
+
+def test_paper_to_si_reproduces_a_steel_chain_speed():
+    """A speed c F^(1/6) in the paper's units, converted by hand through the line's own
+    scales, equals PAPER_TO_SI times the SI group."""
+    E, nu, rho, d = 2.0e11, 0.3, 7800.0, 0.01
+    k = E * math.sqrt(d) / (3 * (1 - nu**2))
+    m = rho * math.pi * d**3 / 6
+    V = 0.37                                  # any impact speed sets the scales
+    T = (m**2 / (k**2 * V)) ** 0.2
+    F0 = k ** 0.4 * m ** 0.6 * V ** 1.2
+    F = 12.0                                  # N
+    speed = 1.0 * (F / F0) ** (1 / 6) * d / T  # c = 1 * f^(1/6) balls per unit time
+    assert speed == pytest.approx(gm.PAPER_TO_SI * gm.daraio_group(F, E, nu, rho, d),
+                                  rel=1e-12)
+
+
+def test_hertz_contact_time_factor_by_the_beta_function():
+    integral = 0.4 * special.beta(0.4, 0.5)   # int_0^1 (1 - x^(5/2))^(-1/2) dx
+    assert gm.hertz_contact_time_factor() == pytest.approx(2 * integral * 1.25**0.4,
+                                                           rel=1e-12)
+
+
+def test_first_pulse_finds_the_first_of_two_peaks():
+    t = np.arange(0.0, 10.0, 0.01)
+    f = 2.0 + 3.0 * np.exp(-((t - 2.345) / 0.3) ** 2) + 5.0 * np.exp(-((t - 7.0) / 0.3) ** 2)
+    tp, fp = gm.first_pulse(t, f, baseline=2.0)
+    assert tp == pytest.approx(2.345, abs=1e-4) and fp == pytest.approx(5.0, abs=1e-3)
+
+
+def test_wave_speed_restitution_energy_split_drift():
+    assert gm.wave_speed([10, 20, 30], [1.0, 2.0, 3.0]) == pytest.approx(10.0)
+    assert gm.restitution([1, 2], [1, 1], [-1, -0.25]) == pytest.approx(0.5)
+    assert gm.energy_split([1, 2, 1], [1, 1, 2], 2) == (0.5, 1.0, 2.0)
+    np.testing.assert_allclose(gm.drift([0.0, 1.0], [1.0, -2.0], 0.5, 1.5), [1.0, -1.0])
+
+
+# ------------------------------------------------------------- against the solver
+def test_two_balls_against_the_solver():
+    """A heavy impurity struck directly: two balls, the elastic two-body outcome."""
+    ds = chainrun.simulate(chain={"n": 2, "k": 1, "alpha": 1.5, "mass": [1.0, 4.0]})
+    v1, v2 = gm.two_ball(1.0, 4.0)
+    np.testing.assert_allclose(ds.final_velocity.values, [v1, v2], atol=1e-12)
+    before, on, after = gm.energy_split([1.0, 4.0], ds.final_velocity.values, 2)
+    assert on == pytest.approx(0.5 * 4 * 4 / 25, rel=1e-10)   # 4M/(1+M)^2 of 1/2
+    assert before + on + after == pytest.approx(0.5, rel=1e-11)
+
+
+def test_one_bead_on_a_wall_lasts_hertz_time_and_bounces_back_whole():
+    ds = chainrun.simulate(chain={"n": 1, "velocity": 1.0, "alpha": 1.5},
+                           walls={"right": {"stiffness": 1.0}})
+    # elastic: the bead leaves as fast as it came, to the solver's accuracy (rtol 1e-12)
+    assert gm.restitution([1.0], [1.0], ds.final_velocity.values) == pytest.approx(1.0,
+                                                                                 abs=1e-10)
+    release = float(ds.event_time.values[-1])
+    assert release == pytest.approx(gm.hertz_contact_time_factor(), rel=1e-9)
+
+
+def test_head_on_symmetric_line_is_antisymmetric_and_keeps_momentum():
+    v0 = [1.0] + [0.0] * 5 + [-1.0]
+    ds = chainrun.simulate(chain={"n": 7, "alpha": 1.5, "velocity": v0})
+    v = ds.final_velocity.values
+    np.testing.assert_allclose(v, -v[::-1], atol=1e-13)
+    assert abs(v.sum()) < 1e-13
+
+
+# -------------------------------------------------------------------------- pipeline
+@pytest.mark.slow
+def test_head_on_item_from_configs_to_figure(tmp_path):
+    """simulate -> analyze -> plot for one gallery item, through the commands."""
+    runner = CliRunner()
+    item = artefacts.get("gallery-head-on")
+    for experiment in item.experiments:
+        out = artefacts.run_dir(experiment, tmp_path)
+        done = runner.invoke(main, ["simulate", str(ROOT / "configs" / f"{experiment}.toml"),
+                                    "-o", str(out)])
+        assert done.exit_code == 0, done.output
+    done = runner.invoke(main, ["analyze", item.name, "--results", str(tmp_path)])
+    assert done.exit_code == 0, done.output
+    done = runner.invoke(main, ["plot", item.name, "--results", str(tmp_path)])
+    assert done.exit_code == 0, done.output
+    for path in artefacts.output_paths(item, tmp_path):
+        assert path.stat().st_size > 0
+    from chainrun.store import read_analysis
+
+    values = read_analysis(artefacts.analysis_path(item.name, tmp_path)).values
+    assert values["symmetry_error"] < 1e-12
+    assert values["unequal_momentum"] == pytest.approx(0.5, abs=1e-12)
+    for mu in (0.25, 0.5, 2.0, 4.0):   # energy is conserved: the two shares make 1
+        assert values[f"impurity_{mu:g}_reflected"] + values[
+            f"impurity_{mu:g}_transmitted"] == pytest.approx(1.0, abs=1e-9)
