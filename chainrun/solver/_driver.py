@@ -46,9 +46,9 @@ def load_kernels(S: _state.State | None = None) -> None:
     """
     if S is None:
         S = _new_state(2, 1, 1.5, DEFAULT_RTOL, None, None)
-    _jit.prepare(_loop.advance, S)
-    _jit.prepare(_loop._snapshot, S, 0.0)
-    _jit.prepare(_loop._sample, S, 0.0, np.zeros(1, np.int64), np.zeros(1), np.zeros(1))
+    _jit.prepare_all([(_loop.advance, (S,)), (_loop._snapshot, (S, 0.0)),
+                      (_loop._sample, (S, 0.0, np.zeros(1, np.int64), np.zeros(1),
+                                       np.zeros(1)))])
 
 
 def release_compression(alpha, floor, stiffness=1.0, inverse_mass=2.0):

@@ -153,16 +153,27 @@ def prepare(dispatcher, *args, folder: Path | None = None, stream=None) -> bool:
 
     Returns True if it was compiled or loaded now, False if it was ready already.
     """
+    return prepare_all([(dispatcher, args)], folder=folder, stream=stream)
+
+
+def prepare_all(entries, folder: Path | None = None, stream=None) -> bool:
+    """``prepare`` for each (dispatcher, args) of ``entries``, under one notice to the
+    user if any of them compiles."""
     if config.DISABLE_JIT:
         return False
-    sig = tuple(nb.typeof(a) for a in args)
-    if sig in dispatcher.overloads:
+    todo = []
+    for dispatcher, args in entries:
+        sig = tuple(nb.typeof(a) for a in args)
+        if sig not in dispatcher.overloads:
+            todo.append((dispatcher, sig))
+    if not todo:
         return False
     folder = cache_dir() if folder is None else folder
     notice = _Notice(sys.stderr if stream is None else stream,
-                     now=not _cached(dispatcher, folder))
+                     now=not all(_cached(dispatcher, folder) for dispatcher, _ in todo))
     try:
-        dispatcher.compile(sig)
+        for dispatcher, sig in todo:
+            dispatcher.compile(sig)
     finally:
         notice.close()
     return True
