@@ -169,3 +169,19 @@ def test_no_scipy_at_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_damping_for_restitution_on_arrays():
+    # a line of contacts: each its own masses, stiffness and exponent, one solve per (e, alpha)
+    e = np.array([0.9, 0.9, 0.5, 1.0, 0.9])
+    k = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    alpha = np.array([1.5, 1.5, 1.5, 2.0, 1.0])
+    mu = np.array([0.5, 0.25, 1.0, 2.0, 0.5])
+    eta = r.damping_for_restitution(e, "tsuji", k, alpha, mu)
+    assert eta.shape == (5,) and eta[3] == 0.0
+    for i in range(5):
+        assert eta[i] == r.damping_for_restitution(float(e[i]), "tsuji", float(k[i]),
+                                                   float(alpha[i]), float(mu[i]))
+    # Kuwabara-Kono is speed-free at alpha = 2 (beta = 1/2 = (alpha - 1)/2)
+    eta = r.damping_for_restitution(0.7, "kuwabara-kono", 1.0, 2.0, 1.0)
+    assert r.restitution(eta, 0.5, 1.0, 2.0, 1.0, 123.0) == pytest.approx(0.7, abs=1e-10)

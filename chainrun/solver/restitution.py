@@ -284,27 +284,31 @@ def _scaled_inverse(e: float, alpha: float, beta: float) -> float:
     return math.exp(brentq(miss, lo, hi, xtol=1e-15, rtol=8.9e-16, maxiter=200))
 
 
-def damping_for_restitution(e: float, law: str, stiffness: float, alpha: float,
-                            reduced_mass: float, speed: float | None = None) -> float:
+def damping_for_restitution(e, law: str, stiffness, alpha, reduced_mass, speed=None):
     """The damping eta that gives a collision the coefficient of restitution ``e``.
+
+    Every argument but ``law`` may be an array (they broadcast); the scaled inverse is
+    solved once for each distinct pair (e, alpha), so a long line of alike contacts
+    costs one solve.
 
     Parameters
     ----------
-    e : float
+    e : float or array_like
         0 < e <= 1 (1 gives 0: elastic).
     law : {"dashpot", "kuwabara-kono", "tsuji"}
         Sets the damping exponent (``law_exponent``).
-    stiffness, alpha, reduced_mass : float
+    stiffness, alpha, reduced_mass : float or array_like
         As for ``restitution``.
-    speed : float, optional
+    speed : float or array_like, optional
         The impact speed at which the collision has restitution ``e``. Needed unless
-        e does not depend on it (``is_speed_free``: tsuji, or the dashpot with
-        alpha = 1), where the damping is ``G sqrt(mu kappa)``.
+        e does not depend on it (``is_speed_free``: tsuji, the dashpot with alpha = 1,
+        Kuwabara-Kono with alpha = 2), where the damping is ``G sqrt(mu kappa)``.
 
     Returns
     -------
-    float
-        eta, for the exponent ``law_exponent(law, alpha)``.
+    float or ndarray
+        eta, for the exponent ``law_exponent(law, alpha)``; a float if every argument
+        is a scalar.
 
     Raises
     ------
@@ -312,23 +316,46 @@ def damping_for_restitution(e: float, law: str, stiffness: float, alpha: float,
         An unknown law, e outside (0, 1], a missing speed where e depends on it, or
         another argument out of range.
     """
-    e = float(e)
-    if not (math.isfinite(e) and 0.0 < e <= 1.0):
-        raise ValueError(f"the restitution must be in (0, 1], got {e!r}")
-    beta = law_exponent(law, alpha)
-    free = is_speed_free(alpha, beta)
+    import numpy as np
+
+    law_exponent(law, 1.0)  # an unknown law fails first
+    scalar = all(np.ndim(a) == 0 for a in (e, stiffness, alpha, reduced_mass, speed))
+    e, kappa, alpha, mu = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (
+        e, stiffness, alpha, reduced_mass)))
+    bad = ~(np.isfinite(e) & (e > 0.0) & (e <= 1.0))
+    if bad.any():
+        raise ValueError(f"the restitution must be in (0, 1], got {float(e[bad].flat[0])!r}")
+    for name, a, low in (("stiffness", kappa, 0.0), ("reduced_mass", mu, 0.0)):
+        if not np.all(np.isfinite(a) & (a > low)):
+            raise ValueError(f"{name} must be a finite number > 0, got "
+                             f"{float(a[~(np.isfinite(a) & (a > low))].flat[0])!r}")
+    if not np.all(np.isfinite(alpha) & (alpha >= 1.0)):
+        raise ValueError(f"alpha must be a finite number >= 1, got "
+                         f"{float(alpha[~(np.isfinite(alpha) & (alpha >= 1.0))].flat[0])!r}")
+    beta = np.vectorize(lambda a: law_exponent(law, a), otypes=[float])(alpha)
+    free = beta == (alpha - 1.0) / 2.0
+    damped = e < 1.0
     if speed is None:
-        if not free:
-            raise ValueError(f"the restitution of the {law} law (alpha = {float(alpha):g}) "
-                             "depends on the impact speed: give the speed it refers to")
-        speed = 1.0  # any speed: G is proportional to v^0
-    _, _, kappa, alpha, mu, v = _check_law(0.0, beta, stiffness, alpha, reduced_mass, speed)
-    if e == 1.0:
-        return 0.0
-    g = _scaled_inverse(e, alpha, beta)
-    if free:
-        return g * math.sqrt(mu * kappa)
-    return g * mu * v / _length(kappa, alpha, mu, v) ** (beta + 1.0)
+        if np.any(damped & ~free):
+            a = float(alpha[damped & ~free].flat[0])
+            raise ValueError(f"the restitution of the {law} law (alpha = {a:g}) depends "
+                             "on the impact speed: give the speed it refers to")
+        v = np.ones_like(e)  # any speed: G does not depend on it
+    else:
+        v = np.broadcast_to(np.asarray(speed, dtype=float), e.shape)
+        if not np.all(np.isfinite(v) & (v > 0.0)):
+            raise ValueError(f"speed must be a finite number > 0, got "
+                             f"{float(v[~(np.isfinite(v) & (v > 0.0))].flat[0])!r}")
+    g = np.zeros(e.shape)
+    pairs = np.stack([e[damped], alpha[damped], beta[damped]], axis=-1)
+    if pairs.size:
+        unique, back = np.unique(pairs, axis=0, return_inverse=True)
+        solved = np.array([_scaled_inverse(float(ei), float(ai), float(bi))
+                           for ei, ai, bi in unique])
+        g[damped] = solved[back.reshape(-1)]
+    length = (mu * v * v / kappa) ** (1.0 / (alpha + 1.0))
+    eta = np.where(free, g * np.sqrt(mu * kappa), g * mu * v / length ** (beta + 1.0))
+    return float(eta) if scalar else eta
 
 
 def _measure() -> None:
