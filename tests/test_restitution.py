@@ -26,7 +26,7 @@ def oscillator(eta: float, k: float, mu: float, v: float) -> tuple[float, float]
         w = math.sqrt(w0 * w0 - gamma * gamma)
         x = lambda t: v / w * math.exp(-gamma * t) * math.sin(w * t)
         dx = lambda t: v * math.exp(-gamma * t) * (math.cos(w * t) - gamma / w * math.sin(w * t))
-        hi = math.pi / w
+        hi = min(math.pi / w, 50.0 / w0)   # x > 0 and the force < 0 after its zero, until pi/w
     else:
         w = math.sqrt(gamma * gamma - w0 * w0)
         x = lambda t: v / w * math.exp(-gamma * t) * math.sinh(w * t)
