@@ -17,9 +17,12 @@ The schema (TOML shown; YAML has the same structure)::
     # any line (docs/guide.md): per ball mass, velocity (instead of k), force, and in SI
     # diameter, material (or young, poisson, density); per contact stiffness, alpha
     # (<= MAX_ALPHA), gap: a number, a list or a generator table (chainrun.generators);
-    # speed (with k), precompression; top-level units = "paper" | "si"
+    # speed (with k), precompression; top-level units = "paper" | "si"; dissipation:
+    # per contact damping (>= 0) and damping_exponent (>= 0), or restitution (0 < e <= 1)
+    # with damping_law ("dashpot" | "kuwabara-kono" | "tsuji") and, where e depends on
+    # the impact speed, restitution_speed (> 0)
     [walls.right]                    # optional, likewise [walls.left]
-    stiffness = 1.0                  # alpha, gap; or material (SI)
+    stiffness = 1.0                  # alpha, gap; or material (SI); the dissipation keys
     [output]                         # optional
     times = [0.0, 5.0]               # or {start = 0, stop = 60, step = 5}, stop inclusive;
                                      # none after solver.t_end
@@ -49,7 +52,7 @@ import reprlib
 import sys
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Annotated, Any, NamedTuple
 
 import numpy as np
@@ -73,6 +76,7 @@ from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
 from chainrun.solver import DEFAULT_RTOL, Line, Wall
 from chainrun.solver import physics
+from chainrun.solver import restitution as collision
 from chainrun.solver.model import precompress
 
 
@@ -197,12 +201,24 @@ SWEEPABLE_KEYS: dict[str, type] = {
     "chain.speed": float,
     "chain.precompression": float,
     "chain.diameter": float,
+    "chain.damping": float,
+    "chain.damping_exponent": float,
+    "chain.restitution": float,
+    "chain.restitution_speed": float,
     "walls.left.stiffness": float,
     "walls.left.alpha": float,
     "walls.left.gap": float,
+    "walls.left.damping": float,
+    "walls.left.damping_exponent": float,
+    "walls.left.restitution": float,
+    "walls.left.restitution_speed": float,
     "walls.right.stiffness": float,
     "walls.right.alpha": float,
     "walls.right.gap": float,
+    "walls.right.damping": float,
+    "walls.right.damping_exponent": float,
+    "walls.right.restitution": float,
+    "walls.right.restitution_speed": float,
     "solver.rtol": float,
     "solver.t_end": float,
     "solver.max_events": int,
@@ -386,6 +402,9 @@ _RULES: dict[str, tuple[float | None, bool, float | None, str]] = {
     "young": (0.0, True, None, "ball"),
     "poisson": (-1.0, True, 0.5, "ball"),
     "density": (0.0, True, None, "ball"),
+    "damping": (0.0, False, None, "contact"),
+    "damping_exponent": (0.0, False, None, "contact"),
+    "restitution": (0.0, True, 1.0, "contact"),
 }
 #: Keys of the chain that only SI experiments have (real spheres).
 _SI_KEYS = ("diameter", "material", "young", "poisson", "density")
@@ -441,6 +460,51 @@ _Dump = PlainSerializer(_dump_values)
 _PerItem = Annotated[Any, _Dump]
 
 
+def _check_damping_law(value: Any) -> str | None:
+    if value is None:
+        return None
+    name = _check_str(value)
+    if name not in collision.LAWS:
+        raise _fail([_Issue(f"unknown damping law {_show(name)}"
+                            f"{_suggest(name, list(collision.LAWS))} (known: "
+                            f"{', '.join(collision.LAWS)})")])
+    return name
+
+
+_OptLaw = Annotated[str | None, BeforeValidator(_check_damping_law)]
+
+
+def _dissipation_issues(model: BaseModel) -> list[_Issue]:
+    """Conflicts among a chain's or a wall's dissipation keys.
+
+    A contact's damping is given either as ``damping`` (eta), with its exponent as
+    ``damping_exponent`` or from ``damping_law``, or as ``restitution`` with
+    ``damping_law`` (and ``restitution_speed`` where e depends on the impact speed,
+    which ``build_line`` judges per contact from its exponent).
+    """
+    def given(key: str) -> bool:
+        return getattr(model, key) is not None
+
+    issues: list[_Issue] = []
+    if given("restitution"):
+        issues += [_Issue("give restitution or damping, not both", (key,))
+                   for key in ("damping", "damping_exponent") if given(key)]
+        if not given("damping_law"):
+            issues.append(_Issue(f"required with restitution (one of "
+                                 f"{', '.join(collision.LAWS)})", ("damping_law",)))
+    else:
+        if given("restitution_speed"):
+            issues.append(_Issue("given without restitution", ("restitution_speed",)))
+        if given("damping_law") and given("damping_exponent"):
+            issues.append(_Issue("set by damping_law; give one or the other",
+                                 ("damping_exponent",)))
+        elif given("damping_law") and not given("damping"):
+            issues.append(_Issue("needs damping or restitution", ("damping_law",)))
+        elif given("damping_exponent") and not given("damping"):
+            issues.append(_Issue("given without damping", ("damping_exponent",)))
+    return issues
+
+
 class Chain(BaseModel):
     """The line of balls: ``n`` balls; their masses, contacts (stiffness, exponent
     ``alpha``, gap), initial velocities (the first ``k`` at ``speed``, or ``velocity``
@@ -468,6 +532,11 @@ class Chain(BaseModel):
     gap: Annotated[Any, _values("gap"), _Dump] = None
     force: Annotated[Any, _values("force"), _Dump] = None
     precompression: _OptFloat = Field(None, ge=0)
+    damping: Annotated[Any, _values("damping"), _Dump] = None
+    damping_exponent: Annotated[Any, _values("damping_exponent"), _Dump] = None
+    restitution: Annotated[Any, _values("restitution"), _Dump] = None
+    damping_law: _OptLaw = None
+    restitution_speed: _OptFloat = Field(None, gt=0)
 
     @field_validator("k")
     @classmethod
@@ -505,6 +574,7 @@ class Chain(BaseModel):
             for key in ("k", "speed"):
                 if getattr(self, key) is not None:
                     issues.append(_Issue("give chain.velocity or chain.k, not both", (key,)))
+        issues += _dissipation_issues(self)
         if issues:
             raise _fail(issues)
         return self
@@ -519,7 +589,9 @@ class Chain(BaseModel):
 
 class WallSettings(BaseModel):
     """A flat wall at one end of the line: its contact with the end ball has a
-    stiffness, an exponent and a gap; or, in SI, the wall is of a ``material``."""
+    stiffness, an exponent and a gap; or, in SI, the wall is of a ``material``. Its
+    damping is given as a chain's is (``damping`` and ``damping_exponent``, or
+    ``restitution`` with ``damping_law``), one value for its one contact."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -527,6 +599,11 @@ class WallSettings(BaseModel):
     alpha: _OptFloat = Field(None, ge=1, le=MAX_ALPHA)
     gap: _Float = 0.0
     material: str | None = None
+    damping: _OptFloat = Field(None, ge=0)
+    damping_exponent: _OptFloat = Field(None, ge=0)
+    restitution: _OptFloat = Field(None, gt=0, le=1)
+    damping_law: _OptLaw = None
+    restitution_speed: _OptFloat = Field(None, gt=0)
 
     @field_validator("material", mode="before")
     @classmethod
@@ -541,11 +618,13 @@ class WallSettings(BaseModel):
 
     @model_validator(mode="after")
     def _one_law(self) -> "WallSettings":
+        issues: list[_Issue] = []
         if self.material is not None:
-            given = [key for key in ("stiffness", "alpha") if getattr(self, key) is not None]
-            if given:
-                raise _fail([_Issue("the material's Hertz law sets it; give one or the other",
-                                    (key,)) for key in given])
+            issues += [_Issue("the material's Hertz law sets it; give one or the other", (key,))
+                       for key in ("stiffness", "alpha") if getattr(self, key) is not None]
+        issues += _dissipation_issues(self)
+        if issues:
+            raise _fail(issues)
         return self
 
 
@@ -737,6 +816,7 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
                          right=built.get("right"), **line_kw)
     except ValueError as exc:  # not expected: every value was checked above
         raise LineError([_Problem("chain", str(exc))]) from None
+    line = _with_dissipation(line, chain, walls)
     if chain.precompression:
         if force is not None and np.any(force != 0.0):
             raise LineError([_Problem("chain.precompression", "sets the external force "
@@ -746,6 +826,76 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
         except ValueError as exc:
             raise LineError([_Problem("chain.precompression", str(exc))]) from None
     return line
+
+
+def _damping_of(prefix: str, spec: Any, damping, restitution, kappa: np.ndarray,
+                alpha: np.ndarray, mu: np.ndarray, problems: list["_Problem"]):
+    """(eta, beta) of contacts of stiffness ``kappa``, exponent ``alpha`` and reduced
+    mass ``mu`` (arrays alike) from the dissipation keys of ``spec`` (a chain or a
+    wall; ``damping`` and ``restitution`` already expanded to arrays, or None), or None
+    for elastic contacts (the keys absent) or a problem (added to ``problems``)."""
+    law = spec.damping_law
+    if restitution is not None:
+        beta = np.array([collision.law_exponent(law, a) for a in alpha.reshape(-1)])
+        needs = (restitution < 1.0) & (beta != (alpha - 1.0) / 2.0)
+        if spec.restitution_speed is None and np.any(needs):
+            i = int(np.flatnonzero(needs)[0])
+            where = f"contact {i}, " if prefix == "chain" else ""
+            problems.append(_Problem(f"{prefix}.restitution_speed", f"required: the "
+                                     f"restitution of the {law} law depends on the impact "
+                                     f"speed ({where}alpha = {_bound(float(alpha[i]))}); give "
+                                     "the speed it holds at"))
+            return None
+        try:
+            eta = collision.damping_for_restitution(restitution, law, kappa, alpha, mu,
+                                                    spec.restitution_speed)
+        except (ValueError, RuntimeError) as exc:  # not expected: inputs were checked
+            problems.append(_Problem(f"{prefix}.restitution", str(exc)))
+            return None
+        return np.asarray(eta, dtype=float), beta
+    if damping is None:
+        return None
+    if spec.damping_exponent is not None:
+        return damping, None
+    if law is not None:
+        return damping, np.array([collision.law_exponent(law, a) for a in alpha.reshape(-1)])
+    return damping, np.zeros_like(damping)
+
+
+def _with_dissipation(line: Line, chain: Chain, walls: "Walls") -> Line:
+    """``line`` with the damping its chain's and walls' keys describe (eta from a
+    restitution by ``chainrun.solver.restitution``, with the reduced mass of each
+    contact, ``m_j m_(j+1) / (m_j + m_(j+1))``, and a wall's the end ball's mass)."""
+    problems: list[_Problem] = []
+    changes: dict[str, Any] = {}
+    m = line.mass
+    size = line.n - 1
+    damping = _expanded(chain, "damping", size, problems)
+    restitution = _expanded(chain, "restitution", size, problems)
+    exponent = _expanded(chain, "damping_exponent", size, problems)
+    if problems:
+        raise LineError(problems)
+    mu = m[:-1] * m[1:] / (m[:-1] + m[1:])
+    got = _damping_of("chain", chain, damping, restitution, np.asarray(line.stiffness),
+                      np.asarray(line.alpha), mu, problems)
+    if got is not None:
+        changes["damping"] = got[0]
+        changes["damping_exponent"] = exponent if got[1] is None else got[1]
+    for side, end in (("left", 0), ("right", line.n - 1)):
+        spec, wall = getattr(walls, side), getattr(line, side)
+        if spec is None or wall is None:
+            continue
+        got = _damping_of(f"walls.{side}", spec,
+                          None if spec.damping is None else np.array([spec.damping]),
+                          None if spec.restitution is None else np.array([spec.restitution]),
+                          np.array([wall.stiffness]), np.array([wall.alpha]),
+                          np.array([m[end]]), problems)
+        if got is not None:
+            beta = spec.damping_exponent if got[1] is None else float(got[1][0])
+            changes[side] = replace(wall, damping=float(got[0][0]), damping_exponent=beta)
+    if problems:
+        raise LineError(problems)
+    return replace(line, **changes) if changes else line
 
 
 def _needs_t_end(chain: Chain, walls: "Walls", t_end: float | None) -> list["_Problem"]:

@@ -92,6 +92,25 @@ with the same method as above, generalised:
   step containing it (analytic in free flight; past the end of a terminal run, the
   free flight that follows it).
 
+Damping. A contact (or wall) of ``line.damping`` eta > 0 and exponent beta pushes with
+``F = max(0, kappa c^alpha + eta c^beta c')`` while in contact. Such a contact is
+*engaged* (its force is the law's smooth continuation, ``sign(c)|c|^alpha`` below 0,
+and its release is the law reaching 0 downward, an ``OPEN`` event at c > 0, located and
+refined by Newton like the openings), then *loose* while c > 0: it carries no force,
+and it watches both its law (turning positive again, a ``CLOSE`` at c > 0: a third body
+pushed the pair together again before they parted) and its compression (crossing 0
+downward: it parts, no event); once parted it closes, like any contact, where c
+crosses 0 upward. ``dissipated`` integrates the power ``sum (F - kappa c_+^alpha) c'``
+over the contacts as an extra component of the state (only for a damped line, so an
+elastic one takes exactly its old steps): ``eta c^beta c'^2`` for an engaged contact,
+``-kappa c^alpha c'`` for a loose one, whose stored energy is lost with it. Then
+``line_energy + dissipated`` is the same at every instant. Checked in
+``tests/test_reference_damped.py``: two balls and a ball on a wall against the damped
+oscillator's explicit solution (e to 1e-10, durations to 1e-10 relative; measured 3e-15
+and 1.5e-13), the nonlinear laws against ``chainrun.solver.restitution``'s scaled
+integration (1e-10), the energy balance on damped chains (1e-11; measured 1e-13), a
+force resuming at c > 0, and eta -> 0.
+
 Accuracy of the general line. Measured by ``PYTHONPATH=. python tests/reference.py``
 (``_measure``) over 120 random lines of ``random_line`` (10 per family: masses to a
 ratio 10, stiffnesses over a factor 10, exponents 1, 1.5, 2 mixed, gaps and overlaps,
@@ -435,6 +454,23 @@ class RefLineSolution:
     velocities: np.ndarray
     steps: int
     units: tuple
+    dissipated: float = 0.0
+
+
+def _damping_slots(line):
+    """Per-slot (N + 1) damping and damping exponent of a line's contacts (0: elastic)."""
+    n = line.n
+    eta = np.zeros(n + 1)
+    bet = np.zeros(n + 1)
+    eta[1:n] = getattr(line, "damping", None) if getattr(line, "damping", None) is not None \
+        else 0.0
+    bet[1:n] = getattr(line, "damping_exponent", None) \
+        if getattr(line, "damping_exponent", None) is not None else 0.0
+    for s, wall in ((0, line.left), (n, line.right)):
+        if wall is not None:
+            eta[s] = getattr(wall, "damping", 0.0)
+            bet[s] = getattr(wall, "damping_exponent", 0.0)
+    return eta, bet
 
 
 def _slots(line):
@@ -595,46 +631,89 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
         vp = _pad(vv)
         return vp[:-1] - vp[1:]
 
-    def make_rhs(act):
+    # Damping (eta, beta per slot), in the run's units: eta delta^beta delta' is a force.
+    eta_si, bet = _damping_slots(line)
+    eta = eta_si * L ** bet * V / F
+    damped = present & (eta > 0.0)
+    # The dissipated energy is integrated as an extra component of the state only when
+    # something is damped: an elastic line takes exactly the steps it always took.
+    extra = 1 if damped.any() else 0
+
+    def law(d, r):
+        # the force of an engaged contact: the law's smooth continuation (no clipping;
+        # the contact is released where it reaches 0), sign(d)|d|^alpha for d < 0.
+        # d, r: shape (N + 1,) or (N + 1, S)
+        k, a, e, b = (p if d.ndim == 1 else p[:, None] for p in (kap, alp, eta, bet))
+        ad = np.abs(d)
+        elastic = np.where(a == 1.0, d, np.sign(d) * ad ** a)
+        return k * elastic + e * np.where(b == 0.0, 1.0, ad ** b) * r
+
+    def law_rate(d, r, acc):
+        # d/dt of ``law`` where d > 0 (``acc``: the compressions' second derivative)
+        ad = np.maximum(np.abs(d), 1e-300)
+        de = np.where(alp == 1.0, r, alp * ad ** (alp - 1.0) * r)
+        db = np.where(bet == 0.0, 0.0, bet * ad ** (bet - 1.0) * r * r)
+        return kap * de + eta * (db + np.where(bet == 0.0, 1.0, ad ** bet) * acc)
+
+    def make_rhs(act, loose):
         mask = act.astype(float)
-        linear = alp == 1.0
+        lmask = loose.astype(float)
 
         def rhs(t, y):
-            d = comp(y[:n])
-            f = np.where(linear, d, np.sign(d) * np.abs(d) ** alp) * kap * mask
+            d, r = comp(y[:n]), rate(y[n:2 * n])
+            f = law(d, r) * mask
             a = (f[:-1] - f[1:]) / m + acc_free
-            return np.concatenate((y[n:], a))
+            # dissipated power: (F - kappa delta_+^alpha) delta' summed over contacts;
+            # an engaged one: eta delta^beta delta'^2; a loose one (released with
+            # delta > 0, no force): -kappa delta^alpha delta' (its stored energy is lost)
+            power = np.sum(mask * eta * np.where(bet == 0.0, 1.0, np.abs(d) ** bet) * r * r
+                           - lmask * kap * np.abs(d) ** alp * r)
+            return np.concatenate((y[n:2 * n], a, [power][:extra]))
 
         return rhs
+
+    def accel(rhs, y):
+        """The compressions' second derivative at y."""
+        return rate(rhs(0.0, y)[n:2 * n])
 
     t = 0.0
     x = np.asarray(line.position, float) / L
     v = np.asarray(line.velocity, float) / V
+    lost = 0.0                                           # dissipated energy
     d0, r0 = comp(x), rate(v)
-    # Compressed, or touching (to rounding) and not parting: active from t = 0.
+    # Compressed, or touching (to rounding) and not parting: active from t = 0; a
+    # damped compressed contact whose law gives no force is loose.
     active = present & ((d0 > 0) | ((d0 >= -1e-13) & (r0 >= -FLOOR)))
+    loose = damped & active & (d0 > 0) & (law(d0, r0) <= 0.0)
+    active &= ~loose
     events: list[tuple[float, int, int, float]] = []
     steps = 0
 
     def switch(s: int, kind: int, tj: float, xx: np.ndarray) -> None:
         events.append((tj, s - 1, kind, comp(xx)[s]))
         active[s] = kind == CLOSE
+        # a damped contact released while still compressed stays loose until it closes
+        # again (its law turns positive) or parts (delta crosses 0)
+        loose[s] = kind == OPEN and damped[s] and comp(xx)[s] > 0.0
 
     def restart_consistency(tj: float, xx: np.ndarray, vv: np.ndarray) -> None:
         c, r = comp(xx), rate(vv)
         for s in slots:
+            if loose[s] and c[s] <= 0:
+                loose[s] = False                          # parted: no event
             if active[s] and c[s] <= 0 and r[s] < -FLOOR:
                 switch(s, OPEN, tj, xx)
-            elif not active[s] and c[s] >= 0 and r[s] > FLOOR:
+            elif not active[s] and not loose[s] and c[s] >= 0 and r[s] > FLOOR:
                 switch(s, CLOSE, tj, xx)
 
     def idle(xx, vv) -> bool:
         # Every active contact (if any) touches without load, without moving and
         # without being pressed (balls moving as one body, or a line at rest ahead of
         # a flying striker): its force stays zero, and the free flight may take over.
+        # A loose contact (compressed, no force) is integrated until it parts.
         c, r = comp(xx)[active], rate(vv)[active]
         return bool(np.all(c <= 0) and np.all(np.abs(r) <= FLOOR)
-                    and np.all(b_free[active] == 0.0))
+                    and np.all(b_free[active] == 0.0) and not loose.any())
 
     def fly(xx, vv, dt):
         return xx + vv * dt + 0.5 * acc_free * dt * dt, vv + acc_free * dt
@@ -644,6 +723,20 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
         while isnap < ts_u.size and ts_u[isnap] <= t_to:
             snap_x[isnap], snap_v[isnap] = fly(x, v, ts_u[isnap] - t)
             isnap += 1
+
+    # What each contact watches, by its state: (level, sign after the crossing, kind).
+    # "c" is the compression, "g" the law of a damped contact; kind is the event
+    # recorded (OPEN, CLOSE) or 0 for a loose contact parting (no event).
+    def watches(s):
+        if active[s]:
+            return [("g" if damped[s] else "c", -1.0, OPEN)]
+        if loose[s]:
+            return [("g", 1.0, CLOSE), ("c", -1.0, 0)]
+        return [("c", 1.0, CLOSE)]
+
+    def levels(y):
+        d, r = comp(y[:n]), rate(y[n:2 * n])
+        return {"c": d, "g": law(d, r)}
 
     terminal = False
     while len(events) < max_events:
@@ -670,11 +763,13 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
             restart_consistency(t, x, v)
             continue
 
-        # One smooth segment with a fixed active set.
-        rhs = make_rhs(active)
-        y = np.concatenate((x, v))
+        # One smooth segment with a fixed state of every contact.
+        rhs = make_rhs(active, loose)
+        y = np.concatenate((x, v, [lost][:extra]))
         solver = DOP853(rhs, t, y, t_max, rtol=rtol, atol=atol)
-        last_sign = np.sign(comp(x))
+        watch = [(s, lv, want, kind) for s in slots for lv, want, kind in watches(s)]
+        start = levels(y)
+        last_sign = [np.sign(start[lv][s]) for s, lv, _, _ in watch]
         found = None
         while solver.status == "running":
             t_old, y_old = solver.t, solver.y.copy()
@@ -686,51 +781,66 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
             tsamp = np.linspace(t_old, solver.t, SAMPLES + 1)[1:]
             ys = dense(tsamp)
             ys[:, -1] = solver.y
-            cs = comp(ys[:n])                             # shape (N + 1, SAMPLES)
+            lvs = levels(ys)                              # each shape (N + 1, SAMPLES)
             candidates = []
-            for s in slots:
-                s_prev = last_sign[s]
+            for w, (s, lv, want, kind) in enumerate(watch):
+                s_prev = last_sign[w]
                 t_prev = t_old
-                want = -1.0 if active[s] else 1.0         # sign after the crossing
                 for i in range(SAMPLES):
-                    sg = np.sign(cs[s, i])
+                    sg = np.sign(lvs[lv][s, i])
                     if sg == want and s_prev != want:
-                        tr = brentq(lambda tt: comp(dense(tt)[:n])[s], t_prev, tsamp[i],
+                        tr = brentq(lambda tt: levels(dense(tt))[lv][s], t_prev, tsamp[i],
                                     xtol=1e-16, rtol=1e-15)
-                        if want * rate(dense(tr)[n:])[s] > FLOOR:
-                            candidates.append((tr, s))
+                        yr = dense(tr)
+                        if lv == "c":
+                            speed = rate(yr[n:2 * n])[s]
+                        else:
+                            speed = law_rate(comp(yr[:n]), rate(yr[n:2 * n]),
+                                             accel(rhs, yr))[s]
+                        if want * speed > FLOOR:
+                            candidates.append((tr, w))
                             break
                     if sg != 0:
                         s_prev = sg
                     t_prev = tsamp[i]
-                last_sign[s] = s_prev
+                last_sign[w] = s_prev
             t_stop = min(candidates)[0] if candidates else solver.t
             while isnap < ts_u.size and ts_u[isnap] <= t_stop:
                 ysn = _integrate_to(rhs, t_old, y_old, ts_u[isnap], rtol, atol)
-                snap_x[isnap], snap_v[isnap] = ysn[:n], ysn[n:]
+                snap_x[isnap], snap_v[isnap] = ysn[:n], ysn[n:2 * n]
                 isnap += 1
             if candidates:
-                tr, s = min(candidates)
-                found = (tr, s, t_old, y_old)
+                tr, w = min(candidates)
+                found = (tr, w, t_old, y_old)
                 break
 
         if found is None:
             t = solver.t
-            x, v = solver.y[:n].copy(), solver.y[n:].copy()
+            x, v = solver.y[:n].copy(), solver.y[n:2 * n].copy()
+            lost = float(solver.y[-1]) if extra else 0.0
             break                                         # reached t_max
 
-        tr, s, t_old, y_old = found
+        tr, w, t_old, y_old = found
+        s, lv, want, kind = watch[w]
         # Newton on the integrated flow: no step crosses the non-smooth point.
         yr = _integrate_to(rhs, t_old, y_old, tr, rtol, atol)
         for _ in range(8):
-            dt = -comp(yr[:n])[s] / rate(yr[n:])[s]
+            d, r = comp(yr[:n]), rate(yr[n:2 * n])
+            if lv == "c":
+                dt = -d[s] / r[s]
+            else:
+                dt = -law(d, r)[s] / law_rate(d, r, accel(rhs, yr))[s]
             if abs(dt) <= 4e-16 * max(1.0, tr):
                 break
             tr = tr + dt
             yr = _integrate_to(rhs, t_old, y_old, tr, rtol, atol)
         t = tr
-        x, v = yr[:n].copy(), yr[n:].copy()
-        switch(s, CLOSE if not active[s] else OPEN, t, x)
+        x, v = yr[:n].copy(), yr[n:2 * n].copy()
+        lost = float(yr[-1]) if extra else 0.0
+        if kind == 0:
+            loose[s] = False                              # a loose contact parted
+        else:
+            switch(s, kind, t, x)
         restart_consistency(t, x, v)
 
     if terminal:
@@ -743,7 +853,7 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
         event_kind=np.array([e[2] for e in events], dtype=np.int8),
         event_compression=np.array([e[3] for e in events], dtype=float) * L,
         times=times, positions=snap_x * L, velocities=snap_v * V, steps=steps,
-        units=(M, L, T),
+        units=(M, L, T), dissipated=lost * F * L,
     )
 
 

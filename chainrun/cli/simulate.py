@@ -62,7 +62,11 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     (steel, stainless_steel, chrome_steel, brass, aluminium, glass, ptfe,
     tungsten_carbide; or young, poisson, density): masses and Hertz contacts follow,
     and a wall may have a material. A line with a constant force or two walls needs
-    solver.t_end. docs/guide.md has every key.
+    solver.t_end. Dissipation, per contact: damping (eta) and damping_exponent
+    (beta), F = max(0, k d^alpha + eta d^beta d'), or restitution (0 < e <= 1) with
+    damping_law ("dashpot", "kuwabara-kono", "tsuji") and, where e depends on the
+    impact speed, restitution_speed; the walls take the same keys. docs/guide.md
+    has every key.
 
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
     rtol (accuracy, default 1e-12), max_events. Optional [output] keys besides
