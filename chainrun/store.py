@@ -736,7 +736,7 @@ class RunWriter:
         energies), in total, and by each contact and wall."""
         energy = UNITS[self._units]["energy"]
         times = np.asarray(sol.times, dtype=np.float64)
-        element = _Element(_group(h5, "observables"), "dissipated_energy", (), [],
+        element = _Element(h5["observables"], "dissipated_energy", (), [],
                            len(times), "energy dissipated by the damping since t = 0")
         for i, (t, d) in enumerate(zip(times, sol.dissipated)):
             element.append(i, float(t), float(d))

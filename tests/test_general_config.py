@@ -340,10 +340,6 @@ def test_example_configs(config, tmp_path):
     from chainrun.solver import simulate_line
 
     spec = specs[0]
-    if spec.line.is_damped:
-        # damped contacts are integrated once the solver's kernels take them; until
-        # then such an example is only read and built
-        pytest.skip("damped example: the solver does not integrate damping yet")
     sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
     assert sol.outcome.ok
 

@@ -11,7 +11,8 @@ from chainrun.errors import ChainrunError
 
 def _events(counts: dict[str, int]) -> str:
     names = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
-             "ENGAGE": "engagements"}
+             "ENGAGE": "engagements", "UNLOAD": "unloadings (a damped force at 0)",
+             "RELOAD": "reloadings"}
     total = sum(counts.values())
     parts = [f"{counts[key]} {name}" for key, name in names.items() if counts.get(key)]
     return f"{total} events" + (f" ({', '.join(parts)})" if parts else "")
