@@ -235,3 +235,23 @@ def test_a_heavily_damped_line_ends_moving_as_one_body(alpha, beta):
     assert np.ptp(v) < 1e-2 * v.mean()
     # nearly all of the impact energy went into the damping
     assert sol.dissipated_energy == pytest.approx(0.5 * k - 0.5 * k * k / n, rel=1e-3)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_damped_lines_against_the_reference_solver(seed):
+    """The test-only reference solver (tests/reference.py, which shares no code with the
+    solver) on random damped lines, walls included: final state, snapshots and the
+    energy dissipated."""
+    from reference import reference_line
+
+    rng = np.random.default_rng(100 + seed)
+    line = _random_damped_line(rng, int(rng.integers(2, 7)))
+    times = np.linspace(0.0, 8.0, 9)
+    ref = reference_line(line, times=times, t_max=200.0)
+    sol = simulate_line(line, times)
+    assert ref.terminal and sol.terminal
+    scale = float(np.max(np.abs(line.velocity)))
+    np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, atol=1e-9 * scale)
+    np.testing.assert_allclose(sol.velocities, ref.velocities, atol=1e-9 * scale)
+    e0 = float(line_kinetic_energy(line.velocity, line.mass))
+    assert sol.dissipated_energy == pytest.approx(ref.dissipated, abs=1e-10 * e0)
