@@ -40,8 +40,16 @@ _BALL_VARS = {
 _EVENT_VARS = {
     "event_time": "time of the contact event",
     "event_contact": "contact j (0-based) joins balls j+1 and j+2",
-    "event_kind": "chainrun.solver.EventKind: -2 release, -1 open, 1 close, 2 engage",
+    "event_kind": "chainrun.solver.EventKind: -3 unload, -2 release, -1 open, 1 close, "
+                  "2 engage, 3 reload",
 }
+#: the quantity of each variable, for its unit in a run in SI
+_QUANTITY = {"position": "position", "velocity": "velocity", "final_position": "position",
+             "final_velocity": "velocity", "separation_time": "time",
+             "separation_velocity": "velocity", "event_time": "time",
+             "kinetic_energy": "energy", "potential_energy": "energy", "momentum": "momentum",
+             "dissipated_energy": "energy", "contact_dissipation": "energy",
+             "sensor_force": "force", "sensor_mean_force": "force"}
 _OBSERVABLES = {
     "kinetic_energy": "kinetic energy of the line",
     "potential_energy": "energy stored in the contacts",
@@ -54,12 +62,14 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
 
     Data variables: ``position`` and ``velocity`` (time, ball); with force sensors,
     ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``; the observables
-    ``kinetic_energy``, ``potential_energy``, ``momentum`` (time); the final and
+    ``kinetic_energy``, ``potential_energy``, ``momentum`` (time), and for a damped line
+    ``dissipated_energy`` (time) and ``contact_dissipation`` (contact); the final and
     separation positions, velocities and times (ball); the event log ``event_time``,
     ``event_contact``, ``event_kind`` (event). Attributes: the run's parameters
     (``n``, ``k``, ``alpha``, ``rtol``, ``t_end``, ...), its outcome (``outcome``,
     ``terminal``, ``end_time``, ``message``), its diagnostics (``diagnostics_*``), the
-    config text and hash, and the writing software's version.
+    config text and hash, and the writing software's version. Every quantity has its
+    ``units``: the paper's, or SI (m, s, m/s, J, N, ...) for a run in SI.
 
     Raises ``chainrun.errors.StoreError`` (one line) for a file that is not a readable
     chainrun run file.
@@ -85,6 +95,12 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
              for name, text in _BALL_VARS.items()}
     data |= {name: ("event", getattr(run, name), {"long_name": text})
              for name, text in _EVENT_VARS.items()}
+    if "dissipated_energy" in run.observables:
+        data["dissipated_energy"] = ("time", run.observables["dissipated_energy"],
+                                     {"long_name": "energy the damping dissipated since t = 0"})
+        coords["contact"] = ("contact", np.arange(1, n))
+        data["contact_dissipation"] = ("contact", run.contact_dissipation,
+                                       {"long_name": "energy each contact dissipated"})
     if run.sensor_balls.size:
         coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
                    "side": ("side", ["towards ball 1", "away from ball 1"])}
@@ -92,16 +108,20 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
                                 {"long_name": "contact force on each side of a sensor ball"})
         data["sensor_mean_force"] = (("sample", "sensor"), run.sensor_force.mean(axis=2),
                                      {"long_name": "mean of the two: what a sensor measures"})
+    from chainrun.store import UNITS
+
+    si = run.units == "si"
     for name, (_dims, _values, meta) in data.items():
         if name not in ("event_contact", "event_kind"):  # numbers, not quantities
-            meta["units"] = _UNITS
+            meta["units"] = UNITS["si"][_QUANTITY[name]] if si else _UNITS
     params = {k: v for k, v in run.parameters.items()
               if k not in ("config_resolved", "overrides")}
     attrs = {
         **{k: ("none" if v is None else v) for k, v in params.items()},
         "overrides": json.dumps(run.parameters.get("overrides", {})),
         "outcome": run.outcome, "terminal": int(run.terminal), "end_time": run.end_time,
-        "message": run.message, "units": _UNITS,
+        "message": run.message, "units": "SI" if si else _UNITS,
+        "dissipated_energy": run.dissipated_energy,
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
     }

@@ -125,3 +125,29 @@ damping_law = "tsuji"
     assert result.exit_code == 0, result.output
     assert "damping   dissipated" in result.output
     assert "of the initial kinetic energy" in result.output
+
+
+def test_open_run_gives_the_dissipation_in_si_units(tmp_path):
+    from chainrun.api import open_run
+
+    out = simulate_text(tmp_path, """
+name = "damped"
+units = "si"
+[chain]
+n = 3
+k = 1
+speed = 0.5
+diameter = 0.0254
+material = "steel"
+restitution = 0.9
+damping_law = "tsuji"
+[output]
+times = {start = 0.0, stop = 4.0e-4, step = 2.0e-5}
+""")
+    ds = open_run(out / "run.h5")
+    assert ds["dissipated_energy"].attrs["units"] == "J"
+    assert ds["velocity"].attrs["units"] == "m/s"
+    assert ds["contact_dissipation"].sizes["contact"] == 2
+    assert float(ds["dissipated_energy"][-1]) == pytest.approx(ds.attrs["dissipated_energy"],
+                                                               rel=1e-9)
+    assert ds.attrs["dissipated_energy"] > 0.0
