@@ -87,12 +87,15 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
 
 @kernel(inline="always")
 def _damping(c, w, beta):
-    """|c|^beta w: the damping force of unit damping (beta = 0 and 1/2 without a pow)."""
+    """|c|^beta w: the damping force of unit damping (the named laws' beta = 0, 1/2 and,
+    for Hertz, Tsuji's 1/4 without a pow)."""
     if beta == 0.0:
         return w
     a = abs(c)
     if beta == 0.5:
         return np.sqrt(a) * w
+    if beta == 0.25:
+        return np.sqrt(np.sqrt(a)) * w
     return a ** beta * w
 
 
