@@ -168,11 +168,15 @@ GALLERY: tuple[Artefact, ...] = (
              "peak force, with and without precompression, beside Nesterenko's laws",
              ("solitary-prefactor", "solitary-steel", "solitary-precompressed")),
     _gallery("cradle", "Newton's cradle of five 25.4 mm steel balls: Table 1 in SI, and how "
-             "far the 'stationary' balls move in the first second", ("cradle",)),
+             "far the 'stationary' balls move in the first second, elastic and with a "
+             "restitution of 0.95", ("cradle", "cradle-damped", "cradle-damped-kk")),
     _gallery("wall", "A column of beads hitting a wall (Falcon et al. 1998): effective "
              "restitution and contact duration against N and impact speed; K beads on K "
-             "resting on a wall",
-             ("wall-column", "wall-column-speed") + tuple(f"wall-2k-{k}" for k in range(1, 5))),
+             "resting on a wall; elastic and damped",
+             ("wall-column", "wall-column-speed", "wall-column-damped",
+              "wall-column-damped-speed", "wall-column-kk-speed")
+             + tuple(f"wall-2k-{k}" for k in range(1, 5))
+             + tuple(f"wall-2k-damped-{k}" for k in range(1, 5))),
     _gallery("head-on", "A line struck at both ends, and a light or heavy impurity: what "
              "crosses and what reflects",
              ("head-on", "head-on-unequal") + tuple(f"impurity-{m}" for m in _IMPURITIES)),

@@ -1,5 +1,6 @@
 """The gallery (``make gallery``): its registry, its measurements against closed forms
-and independent computations, and a smoke run of one item's pipeline."""
+and independent computations, the damped items' energy balance, and smoke runs of
+items' pipelines."""
 
 from __future__ import annotations
 
@@ -17,6 +18,10 @@ from chainrun.analysis import gallery_measure as gm
 from chainrun.analysis import recipe
 from chainrun.cli import main
 from chainrun.config import load_experiment
+from chainrun.runner import run_file, simulate_run
+from chainrun.solver import EventKind
+from chainrun.solver import restitution as two_body
+from chainrun.store import read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -99,6 +104,20 @@ def test_wave_speed_restitution_energy_split_drift():
     np.testing.assert_allclose(gm.drift([0.0, 1.0], [1.0, -2.0], 0.5, 1.5), [1.0, -1.0])
 
 
+def test_wall_contact_ends_where_the_force_returns_to_zero():
+    U, O, C, R, E = (EventKind.UNLOAD, EventKind.OPEN, EventKind.CLOSE, EventKind.RELEASE,
+                     EventKind.ENGAGE)
+    # damped: the collision ends at the unloading; the opening comes after it
+    assert gm.wall_contact([1.0, 1.1], [3, 3], [U, O], 3) == (1.0, 1.1, 1)
+    # two loadings, one damped and one elastic; other contacts' events are ignored
+    assert gm.wall_contact([2.5, 1.1, 0.5, 2.0, 1.0], [3, 3, 2, 3, 3], [O, O, C, C, U],
+                           3) == (2.5, 2.5, 2)
+    # released by the noise floor, engaged again, opened
+    assert gm.wall_contact([1.0, 2.0, 3.0], [0, 0, 0], [R, E, O], 0) == (3.0, 3.0, 2)
+    end, opened, count = gm.wall_contact([], [], [], 0)
+    assert math.isnan(end) and math.isnan(opened) and count == 0
+
+
 # ------------------------------------------------------------- against the solver
 def test_two_balls_against_the_solver():
     """A heavy impurity struck directly: two balls, the elastic two-body outcome."""
@@ -118,6 +137,128 @@ def test_one_bead_on_a_wall_lasts_hertz_time_and_bounces_back_whole():
                                                                                  abs=1e-10)
     release = float(ds.event_time.values[-1])
     assert release == pytest.approx(gm.hertz_contact_time_factor(), rel=1e-9)
+
+
+def _run(tmp_path, text: str):
+    """Simulate a one-run experiment given as TOML text; its run file, read back."""
+    path = tmp_path / "experiment.toml"
+    path.write_text('name = "t"\n' + text)
+    (spec,) = load_experiment(path).runs()
+    summary = simulate_run(spec, tmp_path)
+    assert summary.ok, summary.message
+    return read_run(run_file(tmp_path, spec))
+
+
+def _wall_energy_balance(run):
+    """|final kinetic + dissipated - initial kinetic| / initial, and the same for the
+    dissipation split by contact and wall."""
+    m, v0, v = run.model["mass"], run.model["velocity"], run.final_velocity
+    e0 = 0.5 * np.sum(m * v0**2)
+    parts = run.wall_dissipation.sum() + (0.0 if run.contact_dissipation is None
+                                         else run.contact_dissipation.sum())
+    return (abs(0.5 * np.sum(m * v**2) + run.dissipated_energy - e0) / e0,
+            abs(parts - run.dissipated_energy) / e0)
+
+
+def test_one_bead_on_a_linear_dashpot_wall_is_the_closed_form(tmp_path):
+    """A bead on a spring-dashpot wall (alpha = 1, beta = 0): e = exp(-gamma tau_c), the
+    force vanishing at tau_c = 2 atan2(w, gamma) / w (Schwager and Poeschel 2007)."""
+    m, kappa, eta, v = 1.0, 1.0, 0.6, 1.0
+    run = _run(tmp_path, f"""
+[chain]
+n = 1
+alpha = 1.5
+velocity = {v}
+[walls.right]
+stiffness = {kappa}
+alpha = 1.0
+damping = {eta}
+""")
+    gamma = eta / (2.0 * math.sqrt(m * kappa))   # in units of sqrt(kappa/m)
+    w = math.sqrt(1.0 - gamma**2)
+    tau_c = 2.0 * math.atan2(w, gamma) / w
+    e = math.exp(-gamma * tau_c)
+    assert gm.restitution([m], [v], run.final_velocity) == pytest.approx(e, abs=1e-10)
+    end, opened, count = gm.wall_contact(run.event_time, run.event_contact, run.event_kind, 0)
+    assert end == pytest.approx(tau_c * math.sqrt(m / kappa), rel=1e-9)
+    assert opened > end and count == 1
+    assert run.dissipated_energy == pytest.approx(0.5 * m * v * v * (1 - e * e), rel=1e-9)
+    assert run.wall_dissipation[1] == pytest.approx(run.dissipated_energy, rel=1e-12)
+
+
+def test_one_damped_bead_on_a_wall_is_the_two_body_law(tmp_path):
+    """The gallery's damped wall (Tsuji, e = 0.95) with one bead: the restitution and the
+    contact time of the two-body integration, and energy kept with the dissipation."""
+    run = _run(tmp_path, """
+units = "si"
+[chain]
+n = 1
+velocity = 0.2
+diameter = 0.008
+material = "chrome_steel"
+[walls.right]
+material = "steel"
+restitution = 0.95
+damping_law = "tsuji"
+""")
+    wall = run.model["walls"]["right"]
+    law = (wall["damping"], wall["damping_exponent"], wall["stiffness"], wall["alpha"],
+           run.model["mass"][0], 0.2)
+    e = gm.restitution(run.model["mass"], run.model["velocity"], run.final_velocity)
+    assert two_body.restitution(*law) == pytest.approx(0.95, abs=1e-10)
+    assert e == pytest.approx(0.95, abs=1e-10)
+    end, _, count = gm.wall_contact(run.event_time, run.event_contact, run.event_kind, 0)
+    assert end == pytest.approx(two_body.contact_duration(*law), rel=1e-9)
+    assert count == 1
+    balance, split = _wall_energy_balance(run)
+    assert balance < 1e-10 and split < 1e-12
+
+
+def test_damped_column_keeps_energy_and_rebounds_less_than_one_bead(tmp_path):
+    """Five beads on a wall, e = 0.9 (Tsuji) everywhere: kinetic + dissipated energy is
+    the impact energy, the dissipation is that of the contacts and the wall, and the
+    column's restitution is below one bead's."""
+    run = _run(tmp_path, """
+[chain]
+n = 5
+velocity = 1.0
+alpha = 1.5
+restitution = 0.9
+damping_law = "tsuji"
+[walls.right]
+stiffness = 1.0
+restitution = 0.9
+damping_law = "tsuji"
+""")
+    assert run.terminal
+    balance, split = _wall_energy_balance(run)
+    assert balance < 1e-10 and split < 1e-12
+    e = gm.restitution(run.model["mass"], run.model["velocity"], run.final_velocity)
+    assert 0.0 < e < 0.9
+    assert np.all(np.diff(run.final_velocity) >= -1e-12)   # all moving apart
+
+
+def test_tsuji_column_restitution_does_not_depend_on_the_speed(tmp_path):
+    """Hertz contacts with Tsuji's damping have no scale of speed: the column's
+    restitution is the same at any impact speed (the gallery's damped speed sweep)."""
+    es = []
+    for v in (0.3, 7.0):
+        (tmp_path / f"v{v}").mkdir()
+        run = _run(tmp_path / f"v{v}", f"""
+[chain]
+n = 4
+velocity = {v}
+alpha = 1.5
+restitution = 0.95
+damping_law = "tsuji"
+[walls.right]
+stiffness = 1.0
+restitution = 0.95
+damping_law = "tsuji"
+""")
+        es.append(gm.restitution(run.model["mass"], run.model["velocity"],
+                                 run.final_velocity))
+    assert es[0] == pytest.approx(es[1], abs=1e-10)
 
 
 def test_head_on_symmetric_line_is_antisymmetric_and_keeps_momentum():
@@ -153,3 +294,39 @@ def test_head_on_item_from_configs_to_figure(tmp_path):
     for mu in (0.25, 0.5, 2.0, 4.0):   # energy is conserved: the two shares make 1
         assert values[f"impurity_{mu:g}_reflected"] + values[
             f"impurity_{mu:g}_transmitted"] == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["gallery-wall", "gallery-cradle"])
+def test_damped_items_from_configs_to_figure(tmp_path, name):
+    """The damped cradle and columns through the commands: the energy balance of every
+    damped run, one bead against the two-body law, the trends the pages quote."""
+    runner = CliRunner()
+    item = artefacts.get(name)
+    for experiment in item.experiments:
+        out = artefacts.run_dir(experiment, tmp_path)
+        done = runner.invoke(main, ["simulate", str(ROOT / "configs" / f"{experiment}.toml"),
+                                    "-o", str(out)])
+        assert done.exit_code == 0, done.output
+    for command in ("analyze", "plot"):
+        done = runner.invoke(main, [command, item.name, "--results", str(tmp_path)])
+        assert done.exit_code == 0, done.output
+    from chainrun.store import read_analysis
+
+    values = read_analysis(artefacts.analysis_path(item.name, tmp_path)).values
+    balances = [v for k, v in values.items() if "energy_balance" in k]
+    assert balances and max(balances) < 1e-10
+    if name == "gallery-cradle":
+        for k in range(1, 5):
+            # damping takes energy, never momentum: the K strikers' momentum stays
+            assert sum(values[f"scaled_{n}_K{k}_damped"] for n in range(1, 6)) == \
+                pytest.approx(k, abs=1e-10)
+            assert 0.0 < values[f"dissipated_K{k}_damped"] < 0.5
+        return
+    assert values["one_e_error_damped"] < 1e-9 and values["one_t_rel_error_damped"] < 1e-9
+    e = [values[f"column_e_{n}_damped"] for n in (1, 2, 5, 20)]
+    assert e[0] == pytest.approx(0.95, abs=1e-9) and e == sorted(e, reverse=True)
+    assert values["column_duration_us_20_damped"] > 10 * values["column_duration_us_1_damped"]
+    assert values["speed_e_spread_damped"] < 1e-12   # Tsuji: no scale of speed
+    kk = [values[f"speed_e_{c}cms_kk"] for c in (5, 20, 80, 320)]
+    assert kk == sorted(kk, reverse=True)             # viscoelastic: falls with the speed

@@ -6,7 +6,8 @@ the named values the gallery's comparison (``chainrun.analysis.gallery_compariso
 quotes. The measurements themselves are in ``chainrun.analysis.gallery_measure``.
 
 Items: ``solitary`` (Coste et al. 1997; Nesterenko's laws), ``cradle`` (Newton's cradle
-in SI), ``wall`` (Falcon et al. 1998; N = 2K on a wall), ``head_on`` (a line struck at
+in SI, elastic and damped), ``wall`` (Falcon et al. 1998; N = 2K on a wall; elastic and
+damped), ``head_on`` (a line struck at
 both ends; an impurity), ``taper`` (tapered chains), ``dimer`` (dimer chains).
 """
 
@@ -147,100 +148,190 @@ def solitary(inputs: Inputs) -> Result:
 
 
 # ----------------------------------------------------------------------------- cradle
+def _initial_energy(run) -> float:
+    return float(0.5 * np.sum(run.model["mass"] * run.model["velocity"] ** 2))
+
+
+#: The cradle's experiments: (experiment, suffix of its values, panel, what it is).
+_CRADLES = (("cradle", "", 0, "elastic"),
+            ("cradle-damped", "_damped", 1, "e = 0.95, Tsuji"),
+            ("cradle-damped-kk", "_kk", None, "e = 0.95 at 0.5 m/s, Kuwabara-Kono"))
+
+
 def cradle(inputs: Inputs) -> Result:
-    """Newton's cradle in SI: Table 1 at 0.5 m/s and the drift in the first second."""
+    """Newton's cradle in SI: Table 1 at 0.5 m/s and the drift in the first second,
+    elastic and with a restitution of 0.95 (two damping laws)."""
     r = Result()
     r.setting("drift_time", 1.0)
-    for run in inputs.runs("gallery/cradle"):
-        k = int(_swept(run, "chain.k"))
-        speed = float(run.model["velocity"][0])
-        v = run.final_velocity
-        x = gm.drift(run.final_position, v, run.end_time, 1.0) * 1e3
-        for n in range(1, 6):
-            r.value(f"v_{n}_K{k}", v[n - 1], f"final velocity (m/s) of ball {n}, K = {k}")
-            r.value(f"scaled_{n}_K{k}", v[n - 1] / speed,
-                    f"final velocity of ball {n} over the impact speed, K = {k}")
-            r.value(f"drift_mm_{n}_K{k}", x[n - 1],
-                    f"displacement (mm) of ball {n} at t = 1 s, K = {k}")
-        r.value(f"contact_us_K{k}", run.end_time * 1e6,
-                f"time (microseconds) from first contact to the last, K = {k}")
-        r.series("drift", f"K={k}", np.arange(1, 6), x, label=f"K = {k}", role="data",
-                 panel=0, marker=k - 1)
+    for experiment, sfx, panel, what in _CRADLES:
+        for run in inputs.runs(f"gallery/{experiment}"):
+            k = int(_swept(run, "chain.k"))
+            speed = float(run.model["velocity"][0])
+            v = run.final_velocity
+            x = gm.drift(run.final_position, v, run.end_time, 1.0) * 1e3
+            for n in range(1, 6):
+                r.value(f"v_{n}_K{k}{sfx}", v[n - 1],
+                        f"final velocity (m/s) of ball {n}, K = {k}, {what}")
+                r.value(f"scaled_{n}_K{k}{sfx}", v[n - 1] / speed,
+                        f"final velocity of ball {n} over the impact speed, K = {k}, {what}")
+                r.value(f"drift_mm_{n}_K{k}{sfx}", x[n - 1],
+                        f"displacement (mm) of ball {n} at t = 1 s, K = {k}, {what}")
+            r.value(f"contact_us_K{k}{sfx}", run.end_time * 1e6,
+                    f"time (microseconds) from first contact to the last, K = {k}, {what}")
+            if sfx:
+                e0 = _initial_energy(run)
+                kinetic = float(0.5 * np.sum(run.model["mass"] * v**2))
+                r.value(f"dissipated_K{k}{sfx}", run.dissipated_energy / e0,
+                        f"share of the impact energy dissipated, K = {k}, {what}")
+                r.value(f"energy_balance_K{k}{sfx}",
+                        abs(kinetic + run.dissipated_energy - e0) / e0,
+                        f"|final kinetic + dissipated - initial| / initial, K = {k}, {what}")
+            if panel is not None:
+                r.series("drift" if panel == 0 else "drift_damped", f"K={k}", np.arange(1, 6),
+                         x, label=f"K = {k}", role="data", panel=panel, marker=k - 1)
     r.value("speed", speed, "impact speed (m/s)")
+    r.value("law_difference_mm", max(
+        abs(r.values[f"drift_mm_{n}_K{k}_damped"] - r.values[f"drift_mm_{n}_K{k}_kk"])
+        for n in range(1, 6) for k in range(1, 5)),
+        "largest difference (mm) of a ball's displacement at 1 s between the Tsuji and the "
+        "Kuwabara-Kono cradle")
     return r
 
 
 # ------------------------------------------------------------------------------- wall
-def _wall_release(run) -> tuple[float, int]:
-    """The last time the wall (contact N - 1) lets go, and how many times it does."""
-    wall = run.n - 1
-    mask = (run.event_contact == wall) & (run.event_kind < 0)
-    times = run.event_time[mask]
-    return (float(times.max()) if times.size else float("nan")), int(times.size)
+def _wall_contact(run) -> tuple[float, float, int]:
+    """``gm.wall_contact`` of the right wall (contact N - 1) of a run."""
+    return gm.wall_contact(run.event_time, run.event_contact, run.event_kind, run.n - 1)
+
+
+def _column_restitution(run) -> float:
+    return gm.restitution(run.model["mass"], run.model["velocity"], run.final_velocity)
+
+
+def _wall_law(run) -> tuple[float, float, float, float]:
+    """The right wall's (damping, damping_exponent, stiffness, alpha) as solved."""
+    wall = run.model["walls"]["right"]
+    return (float(wall["damping"]), float(wall["damping_exponent"]),
+            float(wall["stiffness"]), float(wall["alpha"]))
 
 
 def wall(inputs: Inputs) -> Result:
-    """A column hitting a wall, and K balls striking K resting on a wall."""
+    """A column hitting a wall, and K balls striking K resting on a wall, elastic and
+    with a restitution of 0.95."""
+    from chainrun.solver import restitution as two_body
+
     r = Result()
     tau = gm.hertz_contact_time_factor()
     r.value("hertz_tau", tau, "Hertz's contact time factor: t_c = tau (m^2/(kappa^2 v))^(1/5)")
-    ns, es, ds = [], [], []
-    for run in inputs.runs("gallery/wall-column"):
-        n = run.n
-        m = run.model["mass"]
-        e = gm.restitution(m, run.model["velocity"], run.final_velocity)
-        release, count = _wall_release(run)
-        ns.append(n)
-        es.append(e)
-        ds.append(release)
-        r.value(f"column_e_{n}", e, f"effective restitution, column of {n}")
-        r.value(f"column_duration_us_{n}", release * 1e6,
-                f"wall contact duration (microseconds), column of {n}")
-        r.value(f"column_wall_contacts_{n}", count, f"separate wall contacts, column of {n}")
-        if n == 1:
-            v = float(run.model["velocity"][0])
-            kappa = run.model["walls"]["right"]["stiffness"]
-            t_c = tau * (m[0] ** 2 / (kappa**2 * v)) ** 0.2
-            r.value("hertz_t_c_us", t_c * 1e6,
-                    "Hertz's contact time of one bead on the wall (microseconds)")
-            r.value("hertz_rel_error", abs(release / t_c - 1.0),
-                    "relative difference of chainrun's contact time from Hertz's")
-    order = np.argsort(ns)
-    ns, es, ds = np.array(ns)[order], np.array(es)[order], np.array(ds)[order]
-    r.series("restitution", "column", ns, es, label="column of N, 0.2 m/s", role="data",
-             panel=0, marker=0)
-    r.series("duration", "column", ns, ds / ds[0], label="column of N, 0.2 m/s",
-             role="data", panel=1, marker=0)
-    speeds, dur, ev = [], [], []
-    for run in inputs.runs("gallery/wall-column-speed"):
-        v = float(_swept(run, "chain.speed"))
-        speeds.append(v)
-        dur.append(_wall_release(run)[0])
-        ev.append(gm.restitution(run.model["mass"], run.model["velocity"],
-                                 run.final_velocity))
-    speeds, dur, ev = (np.array(a)[np.argsort(speeds)] for a in (speeds, dur, ev))
-    slope = float(np.polyfit(np.log(speeds), np.log(dur), 1)[0])
-    r.value("speed_slope", slope, "log-log slope of the contact duration of a column of 8 "
-                                  "against the impact speed")
-    r.value("speed_e_spread", float(np.ptp(ev)), "spread of the restitution of a column of "
-                                                 "8 over impact speeds 0.05-3.2 m/s")
-    r.value("speed_e", float(np.mean(ev)), "restitution of a column of 8, mean over speeds")
-    for k in range(1, 5):
-        run = inputs.run(f"gallery/wall-2k-{k}")
-        m, v0, v = run.model["mass"], run.model["velocity"], run.final_velocity
-        e = gm.restitution(m, v0, v)
-        r.value(f"2k_e_{k}", e, f"effective restitution, {k} striking {k} on a wall")
-        r.value(f"2k_strikers_{k}", float(np.sum(v[:k]) / k),
-                f"mean final velocity of the {k} strikers")
-        r.value(f"2k_rest_{k}", float(np.sum(v[k:]) / k),
-                f"mean final velocity of the {k} balls that rested on the wall")
-        r.value(f"2k_release_{k}", _wall_release(run)[0],
-                f"time the wall lets go (paper units), K = {k}")
-        r.value(f"2k_wall_contacts_{k}", _wall_release(run)[1],
-                f"separate wall contacts, K = {k}")
-    r.series("restitution", "2k", np.arange(2, 9, 2),
-             [r.values[f"2k_e_{k}"] for k in range(1, 5)], label="K on K resting on the wall",
-             role="data", panel=0, marker=1)
+    for experiment, sfx, what, marker in (("wall-column", "", "elastic", 0),
+                                          ("wall-column-damped", "_damped",
+                                           "e = 0.95, Tsuji", 2)):
+        ns, es, ds = [], [], []
+        for run in inputs.runs(f"gallery/{experiment}"):
+            n = run.n
+            m = run.model["mass"]
+            e = _column_restitution(run)
+            release, opened, count = _wall_contact(run)
+            ns.append(n)
+            es.append(e)
+            ds.append(release)
+            r.value(f"column_e_{n}{sfx}", e, f"effective restitution, column of {n}, {what}")
+            r.value(f"column_duration_us_{n}{sfx}", release * 1e6,
+                    f"wall contact duration (microseconds), column of {n}, {what}")
+            r.value(f"column_wall_contacts_{n}{sfx}", count,
+                    f"separate wall contacts, column of {n}, {what}")
+            if sfx:
+                e0 = _initial_energy(run)
+                kinetic = float(0.5 * np.sum(m * run.final_velocity**2))
+                r.value(f"column_dissipated_{n}{sfx}", run.dissipated_energy / e0,
+                        f"share of the impact energy dissipated, column of {n}, {what}")
+                r.value(f"column_wall_dissipated_{n}{sfx}", run.wall_dissipation[1] / e0,
+                        f"share of the impact energy dissipated at the wall, column of {n}")
+                r.value(f"column_energy_balance_{n}{sfx}",
+                        abs(kinetic + run.dissipated_energy - e0) / e0,
+                        f"|final kinetic + dissipated - initial| / initial, column of {n}")
+                r.value(f"column_open_us_{n}{sfx}", opened * 1e6,
+                        f"time the wall's compression is gone (microseconds), column of {n}")
+            if n == 1:
+                v = float(run.model["velocity"][0])
+                eta, beta, kappa, alpha = _wall_law(run)
+                if sfx:
+                    e_law = two_body.restitution(eta, beta, kappa, alpha, m[0], v)
+                    t_law = two_body.contact_duration(eta, beta, kappa, alpha, m[0], v)
+                    r.value(f"one_e_law{sfx}", e_law,
+                            "restitution of one bead on the damped wall, two-body law")
+                    r.value(f"one_e_error{sfx}", abs(e - e_law),
+                            "|chainrun's restitution of one bead - the two-body law's|")
+                    r.value(f"one_t_c_us{sfx}", t_law * 1e6,
+                            "contact time of one bead on the damped wall, two-body law "
+                            "(microseconds)")
+                    r.value(f"one_t_rel_error{sfx}", abs(release / t_law - 1.0),
+                            "relative difference of chainrun's contact time from the "
+                            "two-body law's")
+                else:
+                    t_c = tau * (m[0] ** 2 / (kappa**2 * v)) ** 0.2
+                    r.value("hertz_t_c_us", t_c * 1e6,
+                            "Hertz's contact time of one bead on the wall (microseconds)")
+                    r.value("hertz_rel_error", abs(release / t_c - 1.0),
+                            "relative difference of chainrun's contact time from Hertz's")
+        order = np.argsort(ns)
+        ns, es, ds = np.array(ns)[order], np.array(es)[order], np.array(ds)[order]
+        label = f"column of N, 0.2 m/s, {what}"
+        r.series("restitution", f"column{sfx}", ns, es, label=label, role="data",
+                 panel=0, marker=marker)
+        r.series("duration", f"column{sfx}", ns, ds / ds[0], label=label, role="data",
+                 panel=1, marker=marker)
+    for experiment, sfx, what, marker in (
+            ("wall-column-speed", "", "elastic", 0),
+            ("wall-column-damped-speed", "_damped", "e = 0.95, Tsuji", 2),
+            ("wall-column-kk-speed", "_kk", "e = 0.95 at 0.2 m/s, Kuwabara-Kono", 3)):
+        speeds, dur, ev = [], [], []
+        for run in inputs.runs(f"gallery/{experiment}"):
+            v = float(_swept(run, "chain.speed"))
+            speeds.append(v)
+            dur.append(_wall_contact(run)[0])
+            ev.append(_column_restitution(run))
+            if sfx:
+                cms = f"{round(v * 100)}cms"   # no '.' in a key: the notes quote them
+                r.value(f"speed_e_{cms}{sfx}", ev[-1],
+                        f"restitution of a column of 8 at {v:g} m/s, {what}")
+                r.value(f"speed_duration_us_{cms}{sfx}", dur[-1] * 1e6,
+                        f"wall contact duration (microseconds), column of 8 at {v:g} m/s, "
+                        f"{what}")
+        speeds, dur, ev = (np.array(a)[np.argsort(speeds)] for a in (speeds, dur, ev))
+        slope = float(np.polyfit(np.log(speeds), np.log(dur), 1)[0])
+        r.value(f"speed_slope{sfx}", slope, "log-log slope of the contact duration of a "
+                                            f"column of 8 against the impact speed, {what}")
+        r.value(f"speed_e_spread{sfx}", float(np.ptp(ev)),
+                f"spread of the restitution of a column of 8 over impact speeds 0.05-3.2 "
+                f"m/s, {what}")
+        r.value(f"speed_e{sfx}", float(np.mean(ev)),
+                f"restitution of a column of 8, mean over speeds, {what}")
+        r.series("speed", f"column{sfx}", speeds, ev, label=f"column of 8, {what}",
+                 role="data", panel=2, marker=marker)
+    for sfx, what, marker in (("", "elastic", 1), ("_damped", "e = 0.95, Tsuji", 3)):
+        for k in range(1, 5):
+            run = inputs.run(f"gallery/wall-2k{sfx.replace('_', '-')}-{k}")
+            m, v0, v = run.model["mass"], run.model["velocity"], run.final_velocity
+            e = gm.restitution(m, v0, v)
+            release, _, count = _wall_contact(run)
+            r.value(f"2k_e_{k}{sfx}", e, f"effective restitution, {k} striking {k} on a "
+                                         f"wall, {what}")
+            r.value(f"2k_strikers_{k}{sfx}", float(np.sum(v[:k]) / k),
+                    f"mean final velocity of the {k} strikers, {what}")
+            r.value(f"2k_rest_{k}{sfx}", float(np.sum(v[k:]) / k),
+                    f"mean final velocity of the {k} balls that rested on the wall, {what}")
+            r.value(f"2k_release_{k}{sfx}", release,
+                    f"time the wall lets go (paper units), K = {k}, {what}")
+            r.value(f"2k_wall_contacts_{k}{sfx}", count,
+                    f"separate wall contacts, K = {k}, {what}")
+            if sfx:
+                r.value(f"2k_dissipated_{k}{sfx}", run.dissipated_energy / _initial_energy(run),
+                        f"share of the impact energy dissipated, K = {k}, {what}")
+        r.series("restitution", f"2k{sfx}", np.arange(2, 9, 2),
+                 [r.values[f"2k_e_{k}{sfx}"] for k in range(1, 5)],
+                 label=f"K on K resting on the wall, {what}", role="data", panel=0,
+                 marker=marker)
     return r
 
 

@@ -4,8 +4,8 @@ This module owns the definitions the gallery's recipes (``chainrun.analysis.gall
 use, as pure functions of arrays: the first pulse in a force trace, a wave's speed,
 Nesterenko's long-wave laws in SI units (with and without precompression) and the
 constants that turn the paper's units into them, the effective restitution of a line
-against a wall, the energy on each side of a ball, the drift of free balls, the elastic
-collision of two balls and Hertz's contact time.
+against a wall and how long the wall holds it, the energy on each side of a ball, the drift
+of free balls, the elastic collision of two balls and Hertz's contact time.
 
 Conventions:
 
@@ -14,7 +14,11 @@ Conventions:
 - a wave's *speed* is the slope of the ball number against the time of its force peak
   (balls per unit time; times the diameter for m/s);
 - the *effective restitution* of a line against a wall is the ratio of its centre-of-mass
-  velocity after and before, ``-sum(m v_final) / sum(m v_initial)``.
+  velocity after and before, ``-sum(m v_final) / sum(m v_initial)``;
+- a *wall contact* lasts from the first touch (t = 0) to the instant the wall's force
+  returns to zero: the opening of an elastic contact, the unloading of a damped one
+  (``chainrun.solver.EventKind.UNLOAD``: the collision ends there, while the bead is
+  still slightly pressed; the compression is gone a little later, at its opening).
 
 References
 ----------
@@ -32,6 +36,8 @@ import math
 import numpy as np
 from scipy import integrate
 
+from chainrun.solver import EventKind
+
 __all__ = [
     "PAPER_TO_SI",
     "daraio_group",
@@ -45,6 +51,7 @@ __all__ = [
     "parabola_peak",
     "restitution",
     "two_ball",
+    "wall_contact",
     "wave_speed",
 ]
 
@@ -154,6 +161,44 @@ def restitution(mass, v_initial, v_final) -> float:
     m = np.asarray(mass, dtype=float)
     return float(-np.sum(m * np.asarray(v_final, float)) / np.sum(m * np.asarray(v_initial,
                                                                                 float)))
+
+
+def wall_contact(event_time, event_contact, event_kind, contact: int
+                 ) -> tuple[float, float, int]:
+    """How long a wall holds a line that touches it at t = 0, from the run's events.
+
+    The contact is loaded at t = 0; a loading ends at the first ``UNLOAD``, ``OPEN`` or
+    ``RELEASE`` after it and a new one starts at a ``CLOSE``, ``ENGAGE`` or ``RELOAD``.
+
+    Parameters
+    ----------
+    event_time : ndarray, shape (E,)
+    event_contact, event_kind : ndarray of int, shape (E,)
+        The run's events (``RunData.event_*``).
+    contact : int
+        The wall's contact (0-based; the right wall of N balls is N - 1).
+
+    Returns
+    -------
+    (float, float, int)
+        ``(end, opened, loadings)``: the last time the wall's force returned to zero,
+        the last time its compression did (equal to ``end`` for an elastic wall; NaN
+        when neither happened) and how many separate loadings there were.
+    """
+    time = np.asarray(event_time, float)
+    mask = np.asarray(event_contact) == contact
+    order = np.argsort(time[mask], kind="stable")
+    end = opened = float("nan")
+    loaded, loadings = True, 0
+    for t, kind in zip(time[mask][order], np.asarray(event_kind)[mask][order]):
+        if kind > 0:
+            loaded = True
+            continue
+        if loaded:
+            end, loaded, loadings = float(t), False, loadings + 1
+        if kind in (EventKind.OPEN, EventKind.RELEASE):
+            opened = float(t)
+    return end, opened, loadings
 
 
 def energy_split(mass, v, at: int) -> tuple[float, float, float]:

@@ -22,12 +22,17 @@ PANELS = {
         ("precompressed", r"$F_m / F_0$", r"$V / c_0$", "log", "linear"),
     ),
     "gallery-cradle": (
-        ("drift", r"ball $n$", r"displacement at $t$ = 1 s (mm)", "linear", "symlog"),
+        ("drift", r"ball $n$ (elastic)", r"displacement at $t$ = 1 s (mm)", "linear",
+         "symlog"),
+        ("drift_damped", r"ball $n$ ($e$ = 0.95, Tsuji)", r"displacement at $t$ = 1 s (mm)",
+         "linear", "symlog"),
     ),
     "gallery-wall": (
         ("restitution", r"number of beads $N$", r"effective restitution $e$", "linear",
          "linear"),
         ("duration", r"number of beads $N$", r"contact time / one bead's", "linear",
+         "linear"),
+        ("speed", r"impact speed $V$ (m/s)", r"effective restitution $e$ ($N$ = 8)", "log",
          "linear"),
     ),
     "gallery-head-on": (
