@@ -51,8 +51,8 @@ CONNECT_TIMEOUT = 20.0
 
 
 def momentum_text(error: float) -> str:
-    """|dP| for a summary; a line against a wall does not conserve momentum (NaN)."""
-    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a (a wall)"
+    """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
+    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
 
 
 @dataclass(frozen=True)

@@ -688,6 +688,10 @@ class RunWriter:
             ds.attrs["unit"] = UNITS[self._units][name.split("_")[1]]
         if sol.line is not None and sol.line.is_damped:
             self._write_dissipation(h5, results, sol)
+        if sol.line is not None and (sol.line.left or sol.line.right):
+            for side, value in zip(("left", "right"), sol.wall_impulse):
+                results.attrs[f"{side}_wall_impulse"] = np.float64(value)
+            results.attrs["wall_impulse_unit"] = UNITS[self._units]["momentum"]
         results.attrs["end_time"] = np.float64(sol.end_time)
         results.attrs["terminal"] = np.bool_(sol.terminal)
         results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
@@ -895,6 +899,9 @@ class RunData:
         The same by each contact (None for an elastic line).
     wall_dissipation : ndarray, shape (2,)
         The same by the left and right walls.
+    wall_impulse : ndarray, shape (2,)
+        The impulse the left and right walls gave the line by ``end_time`` (+x towards
+        ball N; 0 where there is no wall).
     """
 
     path: Path
@@ -927,6 +934,7 @@ class RunData:
     dissipated_energy: float = 0.0
     contact_dissipation: np.ndarray | None = None
     wall_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
+    wall_impulse: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
 
     @property
     def n(self) -> int:
@@ -1058,6 +1066,8 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         model=_read_model(h5),
         **_read_sensors(h5),
         **_read_dissipation(res),
+        wall_impulse=np.array([float(res.attrs.get(f"{side}_wall_impulse", 0.0))
+                               for side in ("left", "right")]),
     )
 
 

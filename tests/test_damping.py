@@ -129,6 +129,24 @@ def test_a_damped_wall_bounce_is_the_two_body_collision_with_the_ball_mass():
     assert -sol.final_velocity[0] / v == pytest.approx(e, abs=1e-9)
     assert sol.wall_dissipation[1] == pytest.approx(0.5 * m * v * v * (1 - e * e), rel=1e-9)
     assert sol.wall_dissipation[0] == 0.0
+    # the wall's impulse, integrated along the run: the ball's change of momentum
+    assert sol.wall_impulse[1] == pytest.approx(-(1 + e) * m * v, rel=1e-9)
+    assert sol.diagnostics.momentum_error < 1e-12
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0])
+def test_the_walls_impulses_are_integrated_on_elastic_lines_too(alpha):
+    """A ball bouncing between two walls (the series and DOP853 steps alike): each
+    bounce gives 2 m v, and the momentum check accounts for the walls."""
+    m, v = 1.5, 0.8
+    line = Line.make(1, mass=m, velocity=[v], left=Wall(2e4, alpha=alpha, gap=0.5),
+                     right=Wall(1e4, alpha=alpha, gap=0.5))
+    # it meets the right wall at t = 0.625 and the left one at 1.875, each contact
+    # lasting under 0.1 (stiff walls): by t = 2.5 it has bounced once off each
+    sol = simulate_line(line, t_end=2.5)
+    assert sol.wall_impulse == pytest.approx([2 * m * v, -2 * m * v], rel=1e-10)
+    assert sol.final_velocity[0] == pytest.approx(v, rel=1e-10)
+    assert sol.diagnostics.momentum_error < 1e-12
 
 
 def _random_damped_line(rng, n):

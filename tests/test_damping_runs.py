@@ -151,3 +151,22 @@ times = {start = 0.0, stop = 4.0e-4, step = 2.0e-5}
     assert float(ds["dissipated_energy"][-1]) == pytest.approx(ds.attrs["dissipated_energy"],
                                                                rel=1e-9)
     assert ds.attrs["dissipated_energy"] > 0.0
+
+
+def test_the_run_file_keeps_the_walls_impulses(tmp_path):
+    out = simulate_text(tmp_path, """
+name = "bounce"
+[chain]
+n = 2
+k = 1
+mass = [1.0, 3.0]
+alpha = 1.5
+[walls.right]
+stiffness = 1.0
+""")
+    run = read_run(out / "run.h5")
+    # everything that reaches the wall comes back: the momentum the wall gave is the
+    # line's final momentum less its initial one
+    p = float(run.model["mass"] @ run.final_velocity) - 1.0
+    assert run.wall_impulse[1] == pytest.approx(p, rel=1e-10)
+    assert run.wall_impulse[1] < 0.0 and run.wall_impulse[0] == 0.0

@@ -112,9 +112,10 @@ class Diagnostics:
 
     For the paper's line, momentum_error is absolute (the initial momentum is K) and
     energy_error relative to the initial energy K/2. For any other line, momentum_error
-    is relative to the momentum of its scales (NaN with a wall, which takes momentum)
-    and energy_error to its initial kinetic energy, with the external forces' work
-    accounted (``_driver._diagnostics``). Each cluster's internal energy is projected
+    is relative to the momentum of its scales, with the external forces' and the walls'
+    impulses accounted, and energy_error to its initial kinetic energy, with the
+    external forces' work and the damping's dissipation accounted
+    (``_driver._diagnostics``). Each cluster's internal energy is projected
     back to its conserved value at every change of structure (see
     ``_projection._project_energy``); energy_correction is the sum of those corrections,
     relative like energy_error, the honest measure of the integration error that the
@@ -186,6 +187,10 @@ class Solution:
         The energy each contact dissipated by ``end_time``.
     wall_dissipation : ndarray, shape (2,)
         The same for the left and the right wall (0 where there is none).
+    wall_impulse : ndarray, shape (2,)
+        The impulse the left and the right wall gave the line by ``end_time`` (+x
+        towards ball N: the left wall's >= 0, the right's <= 0), integrated along the
+        run; the momentum check accounts for it.
     """
 
     n: int
@@ -217,6 +222,7 @@ class Solution:
     contact_dissipation: np.ndarray = field(default_factory=lambda: np.zeros(0),
                                             repr=False)
     wall_dissipation: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
+    wall_impulse: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a

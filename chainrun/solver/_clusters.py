@@ -16,8 +16,8 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
     B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED, I_DENSE,
-    I_DIRTY, I_DSTAMP, I_M, I_MAXWIN, I_NCL, I_NFREED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA,
-    W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
+    I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL, I_RWL, OPEN,
+    W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -159,6 +159,10 @@ def _rebuild(S):
             S.WP[W_MASS, p] = S.bp[B_MASS, b]
             p += 1
     S.ints[I_M] = m
+    # the lanes to the walls, whose forces the steps sum into the walls' impulses
+    last = S.bx.shape[0] - 1
+    S.ints[I_LWL] = S.bmap[0] if S.ints[I_LWALL] == 1 else -1
+    S.ints[I_RWL] = S.bmap[last] - 1 if S.ints[I_RWALL] == 1 and S.bmap[last] >= 0 else -1
     if m > S.ints[I_MAXWIN]:
         S.ints[I_MAXWIN] = m
     # contact lanes: their stiffness inside a cluster, 0 from a cluster's last ball to

@@ -56,12 +56,19 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
     else:
         stage_v = []
     wgt = f"h * {float(weight)!r}" if weight != 0.0 else "0.0"
+    impulse = [
+        "    if lwl >= 0:",
+        f"        jl += {wgt} * F[lwl]",
+        "    if rwl >= 0:",
+        f"        jr += {wgt} * F[rwl]",
+    ] if weight != 0.0 else []
     return [
         "    if damped:",
         *stage_v,
         f"        _damped_accelerations({x}, {v}, F, MK, WP, DS, {wgt}, KV[{s}], m, mode, alpha)",
         "    else:",
         f"        _accelerations({x}, F, MK, WP, KV[{s}], m, mode, alpha, unit)",
+        *impulse,
     ]
 
 
@@ -284,9 +291,9 @@ _HEADER = [
     ")",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
-    "    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_DAMPED, I_M, I_MODE, I_UNIT, J_OVER_K, KV_DS,",
-    "    KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,",
-    "    _find_cluster, _tw,",
+    "    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, HI_ROW, I_DAMPED, I_LWL, I_M, I_MODE,",
+    "    I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE,",
+    "    W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,",
     ")",
 ]
 
@@ -308,16 +315,30 @@ def generate() -> str:
         "    DOP853 applied to y = (x, v), y' = (v, a(x, v)), written in Nystrom form:",
         "    KV[s] holds the stage accelerations and KV[12] those at the step's end. The",
         "    stage velocities are needed only on a damped line (VS), where the lanes'",
-        "    dissipated power is summed with the step's weights into DS.",
+        "    dissipated power is summed with the step's weights into DS. The walls'",
+        "    forces are summed likewise into their impulses over the step (F_JSL, F_JSR).",
         '    """',
         *_PROLOGUE,
         "    KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V",
+        "    lwl = S.ints[I_LWL]",
+        "    rwl = S.ints[I_RWL]",
         "    for p in range(m):",
         "        KV[0, p] = A0[p]",
         "    if damped:",
         "        for p in range(m):",
         "            DS[p] = 0.0",
         f"        _damped_forces(X0, V0, F, MK, WP, DS, h * {float(B[0])!r}, m, mode, alpha)",
+        "    else:",
+        "        if lwl >= 0:",
+        "            _forces(X0, F, MK, WP[W_ALPHA], lwl, lwl + 1, mode, alpha)",
+        "        if rwl >= 0:",
+        "            _forces(X0, F, MK, WP[W_ALPHA], rwl, rwl + 1, mode, alpha)",
+        "    jl = 0.0",
+        "    jr = 0.0",
+        "    if lwl >= 0:",
+        f"        jl = h * {float(B[0])!r} * F[lwl]",
+        "    if rwl >= 0:",
+        f"        jr = h * {float(B[0])!r} * F[rwl]",
     ]
     for s in range(1, ns):
         lines += _stage_pass("X", s, C[s], AA[s, :s], A[s, :s], B[s])
@@ -326,6 +347,8 @@ def generate() -> str:
         f"        X[p] = X0[p] + h * (V0[p] + {_combo(AA[ns, :ns], 'KV', 'h')})",
         f"        V[p] = V0[p] + {_combo(B, 'KV', 'h')}",
         *_force_pass("X", ns, v="V"),
+        "    S.fs[F_JSL] = jl",
+        "    S.fs[F_JSR] = jr",
     ]
     e5x, e3x = _nystrom(dop.E5), _nystrom(dop.E3)
     lines += [

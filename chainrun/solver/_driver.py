@@ -291,6 +291,9 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_FORCED] = 1 if P.forced else 0
     ints[_state.I_DAMPED] = 1 if P.damped else 0
+    ints[_state.I_LWALL] = P.lw
+    ints[_state.I_RWALL] = P.rw
+    ints[_state.I_LWL] = ints[_state.I_RWL] = -1
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),
@@ -523,6 +526,7 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         dissipated=dissipated, dissipated_energy=float(S.fs[_state.F_DISS]) * sc.energy,
         contact_dissipation=per_contact[P.lw:P.lw + n - 1].copy() if n > 1 else np.zeros(0),
         wall_dissipation=walls,
+        wall_impulse=np.array([S.fs[_state.F_JL], -S.fs[_state.F_JR]]) * sc.mass * sc.velocity,
     )
 
 
@@ -532,8 +536,7 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     The paper's line: momentum and energy in its units, absolute and relative to the
     initial energy K/2, as ever. Any other line, in its own units (``physics``): the
     momentum changes by the external forces' impulse ``sum f t`` (with a wall it is not
-    checked, the wall's impulse not being tracked: NaN), relative to the momentum of the
-    line's scales; kinetic plus contact energy less the forces' work is conserved,
+    the walls' impulses), relative to the momentum of the line's scales; kinetic plus contact energy less the forces' work is conserved,
     relative to the initial kinetic energy (or, for a line starting at rest, to its
     initial energy or the work, the larger); on a damped line the energy the damping
     dissipated counts in the balance.
@@ -550,11 +553,11 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
         x0, v0 = line.position, line.velocity
         x1, v1 = P.positions(y), P.velocities(v)
         m = line.mass
-        if line.left is not None or line.right is not None:
-            p_err = math.nan
-        else:
-            p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t * sc.time
-            p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
+        # the walls' impulses (integrated along the run, as the dissipated energy is)
+        # and the external forces' change the momentum
+        walls = float(S.fs[_state.F_JL] - S.fs[_state.F_JR]) * sc.mass * sc.velocity
+        p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t * sc.time + walls
+        p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
         k0 = float(line_kinetic_energy(v0, m))
         e0 = k0 + float(line_potential_energy(x0, line))
         # what the damping dissipated is part of the balance

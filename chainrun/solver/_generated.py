@@ -18,9 +18,9 @@ from chainrun.solver._forces import (
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    EPS, F_ALPHA, F_HLAST, F_TOL, HI_ROW, I_DAMPED, I_M, I_MODE, I_UNIT, J_OVER_K, KV_DS,
-    KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,
-    _find_cluster, _tw,
+    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, HI_ROW, I_DAMPED, I_LWL, I_M, I_MODE,
+    I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW, SERIES_SCALE, SERIES_TILE, TILE_STRIDE,
+    W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,
 )
 
 
@@ -31,7 +31,8 @@ def _stages(S, h):
     DOP853 applied to y = (x, v), y' = (v, a(x, v)), written in Nystrom form:
     KV[s] holds the stage accelerations and KV[12] those at the step's end. The
     stage velocities are needed only on a damped line (VS), where the lanes'
-    dissipated power is summed with the step's weights into DS.
+    dissipated power is summed with the step's weights into DS. The walls'
+    forces are summed likewise into their impulses over the step (F_JSL, F_JSR).
     """
     m = S.ints[I_M]
     mode = S.ints[I_MODE]
@@ -41,12 +42,25 @@ def _stages(S, h):
     F, MK, WP = S.FS, S.TR, S.WP
     VS, DS = S.KV[KV_VS], S.KV[KV_DS]
     KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V
+    lwl = S.ints[I_LWL]
+    rwl = S.ints[I_RWL]
     for p in range(m):
         KV[0, p] = A0[p]
     if damped:
         for p in range(m):
             DS[p] = 0.0
         _damped_forces(X0, V0, F, MK, WP, DS, h * 0.054293734116568765, m, mode, alpha)
+    else:
+        if lwl >= 0:
+            _forces(X0, F, MK, WP[W_ALPHA], lwl, lwl + 1, mode, alpha)
+        if rwl >= 0:
+            _forces(X0, F, MK, WP[W_ALPHA], rwl, rwl + 1, mode, alpha)
+    jl = 0.0
+    jr = 0.0
+    if lwl >= 0:
+        jl = h * 0.054293734116568765 * F[lwl]
+    if rwl >= 0:
+        jr = h * 0.054293734116568765 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * V0[p])
     if damped:
@@ -87,6 +101,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * 4.450312892752409, KV[5], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[5], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * 4.450312892752409 * F[lwl]
+    if rwl >= 0:
+        jr += h * 4.450312892752409 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.25 * V0[p] + h * (0.018920483189113914 * KV[0, p] + -0.03815245266364541 * KV[2, p] + 0.05268745617004205 * KV[3, p] + -0.00220548669551055 * KV[4, p]))
     if damped:
@@ -95,6 +113,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * 1.8915178993145003, KV[6], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[6], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * 1.8915178993145003 * F[lwl]
+    if rwl >= 0:
+        jr += h * 1.8915178993145003 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
     if damped:
@@ -103,6 +125,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * -5.801203960010585, KV[7], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[7], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * -5.801203960010585 * F[lwl]
+    if rwl >= 0:
+        jr += h * -5.801203960010585 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622033 * KV[0, p] + 0.46966087733519885 * KV[2, p] + -0.06814140470279369 * KV[3, p] + 0.01071185753171531 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
     if damped:
@@ -111,6 +137,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.3111643669578199, KV[8], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[8], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * 0.3111643669578199 * F[lwl]
+    if rwl >= 0:
+        jr += h * 0.3111643669578199 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377502 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.07865735349516391 * KV[3, p] + 0.030838873981239242 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
     if damped:
@@ -119,6 +149,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * -0.1521609496625161, KV[9], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[9], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * -0.1521609496625161 * F[lwl]
+    if rwl >= 0:
+        jr += h * -0.1521609496625161 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.3721894995071433 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.4614987464855827 * KV[3, p] + -0.06518509348541897 * KV[4, p] + 4.098038403866562 * KV[5, p] + 3.8922102844072377 * KV[6, p] + -7.025278165955339 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
     if damped:
@@ -127,6 +161,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.20136540080403034, KV[10], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[10], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * 0.20136540080403034 * F[lwl]
+    if rwl >= 0:
+        jr += h * 0.20136540080403034 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382327 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931152 * KV[3, p] + 0.23253698859550578 * KV[4, p] + 11.903719357881853 * KV[5, p] + -1.9034949405460306 * KV[6, p] + -10.951226401858388 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
     if damped:
@@ -135,6 +173,10 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, h * 0.04471061572777259, KV[11], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[11], m, mode, alpha, unit)
+    if lwl >= 0:
+        jl += h * 0.04471061572777259 * F[lwl]
+    if rwl >= 0:
+        jr += h * 0.04471061572777259 * F[rwl]
     for p in range(m):
         X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.96687526183494 * KV[5, p] + 1.4186384244858756 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.06086437986500647 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
@@ -142,6 +184,8 @@ def _stages(S, h):
         _damped_accelerations(X, V, F, MK, WP, DS, 0.0, KV[12], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[12], m, mode, alpha, unit)
+    S.fs[F_JSL] = jl
+    S.fs[F_JSR] = jr
 
 
 @kernel

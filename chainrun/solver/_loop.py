@@ -23,14 +23,14 @@ from chainrun.solver._forces import _damping
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
 from chainrun.solver._state import (
-    ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA,
-    C_HELD, C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD,
-    EV_UNLOAD, FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_T, F_TEND, F_TOUT, F_TPREV,
-    F_TSAME, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED, I_HAVEOUT,
-    I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY,
-    KV_DS, PT, SERIES_CLUSTERS, W_ETA, W_HELD,
-    ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW,
-    ST_STOP_TIME, ST_TERMINAL, ST_YIELD, YIELD_STEPS, _flight, _free_at, _tw,
+    ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
+    C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
+    FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
+    F_TPREV, F_TSAME, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED, I_HAVEOUT,
+    I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, KV_DS,
+    PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT,
+    ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, W_ETA, W_HELD, YIELD_STEPS, _flight,
+    _free_at, _tw,
 )
 from chainrun.solver._steppers import (
     _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at,
@@ -580,5 +580,7 @@ def advance(S):
                 S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
         if S.ints[I_DAMPED] == 1:
             _commit_dissipation(S)
+        S.fs[F_JL] += S.fs[F_JSL]
+        S.fs[F_JR] += S.fs[F_JSR]
         S.ints[I_STEPS] += 1
         S.ints[I_POST] = 1

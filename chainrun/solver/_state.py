@@ -119,11 +119,17 @@ YIELD_STEPS = 20000
 # ---- scalar slots ---------------------------------------------------------------------
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
-    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_NFLOAT = range(18)
+    F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_JL, F_JR, F_JSL, \
+    F_JSR, F_NFLOAT = range(22)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
-    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_NINT = range(26)
+    I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
+    I_NINT = range(30)
+
+# F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
+# step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
+# window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
 
 # ---- the force laws (I_MODE) ----------------------------------------------------------
 MODE_LINEAR = 0  # every contact alpha = 1

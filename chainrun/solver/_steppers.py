@@ -30,9 +30,10 @@ from chainrun.solver._generated import (
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    B_ACC, EPS, F_ALPHA, F_HLAST, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV,
-    I_DAMPED, I_DENSE, I_DSTAMP, I_M, I_MODE, I_TAY, I_UNIT, MODE_LINEAR, MODE_MIXED, PT,
-    SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at, _tw,
+    B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
+    F_TPREV, I_DAMPED, I_DENSE, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT,
+    MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
+    _tw,
 )
 
 
@@ -148,6 +149,23 @@ def _taylor_at(S, p, s):
     return x * s + T[0, p], v
 
 
+@kernel
+def _series_impulse(S, lane, h):
+    """The impulse of contact lane ``lane``'s force over [0, h] from its series:
+    sum f_k h^(k+1) / (k+1) (0 for lane -1)."""
+    if lane < 0:
+        return 0.0
+    W = S.TW
+    f0 = PT + 1  # row of the forces' f_0
+    linear = S.ints[I_MODE] == MODE_LINEAR  # (its force is kappa c: the rows c_k)
+    mk = S.TR[lane]
+    j = 0.0
+    for k in range(PT - 2, 0, -1):
+        fk = W[_tw(lane, k)] * mk if linear else W[_tw(lane, f0 + k)]
+        j = (j + fk / (k + 1)) * h
+    return (j + W[_tw(lane, f0)]) * h
+
+
 @kernel(fastmath={"contract"})
 def _taylor_step(S, h):
     """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
@@ -166,6 +184,8 @@ def _taylor_step(S, h):
     for p in range(m):
         X[p] = X[p] * h + T[0, p]
     _rhs(S, X, V, S.A)
+    S.fs[F_JSL] = _series_impulse(S, S.ints[I_LWL], h)
+    S.fs[F_JSR] = _series_impulse(S, S.ints[I_RWL], h)
     for p in range(m):
         if not (np.isfinite(X[p]) and np.isfinite(V[p])):
             return np.inf
