@@ -139,6 +139,28 @@ def _load_crossing(S, j, ta, tb, ga, gb):
 
 
 @kernel
+def _load_rate(S, j, c, w, a):
+    """(load, its rate, its rounding) of damped contact j at compression c, rate w and
+    relative acceleration a: what a step's ends say of the load (_find_event), and
+    Newton's residual where a step lands on an unload or a reload (_loop)."""
+    cp = S.cp
+    kappa = cp[C_KAPPA, j]
+    al = cp[C_ALPHA, j]
+    eta = cp[C_ETA, j]
+    beta = cp[C_BETA, j]
+    g = _contact_load(S, j, c, w)
+    ac = abs(c)
+    dg = kappa * al * ac ** (al - 1.0) * w
+    if beta == 0.0:
+        dg += eta * a
+        damp = eta * w
+    else:
+        dg += eta * (beta * ac ** (beta - 1.0) * w * w + ac ** beta * a)
+        damp = eta * ac ** beta * w
+    return g, dg, 16.0 * EPS * (kappa * ac ** al + abs(damp))
+
+
+@kernel
 def _unload_event(S, j, hcap):
     """The first kink of damped contact j's force in the last step before ``hcap``.
 
@@ -375,10 +397,25 @@ def _find_event(S):
                 bk = kind
                 blev = lev
     if S.ints[I_DAMPED] == 1:
-        # the kinks of the damped forces inside the clusters
+        # the kinks of the damped forces inside the clusters. A load whose ends are on
+        # the side the contact is on, by more than twice what a parabola through its
+        # ends' rates could dip (h |g'_1 - g'_0| / 8), is not sampled
         for c in range(S.ints[I_NCL]):
-            for j in range(S.clo[c], S.chi[c]):
+            lo = S.clo[c]
+            o = S.coff[c] - lo
+            for j in range(lo, S.chi[c]):
                 if S.cp[C_ETA, j] != 0.0:
+                    p = o + j
+                    g0, d0, _r0 = _load_rate(S, j, X0[p] - X0[p + 1], S.V0[p] - S.V0[p + 1],
+                                             A0[p] - A0[p + 1])
+                    g1, d1, _r1 = _load_rate(S, j, X[p] - X[p + 1], S.V[p] - S.V[p + 1],
+                                             A[p] - A[p + 1])
+                    margin = 0.5 * h * abs(d1 - d0)
+                    if S.cp[C_HELD, j] == 0.0:
+                        if g0 > margin and g1 > margin:
+                            continue
+                    elif g0 < -margin and g1 < -margin:
+                        continue
                     th, kind = _unload_event(S, j, best)
                     if th < best:
                         best = th

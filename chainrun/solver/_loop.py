@@ -18,7 +18,9 @@ import numpy as np
 
 from chainrun.solver._clusters import _activate, _deactivate, _rebuild, _sync
 from chainrun.solver._compression import _pressed_in_step
-from chainrun.solver._events import _contact_at, _contact_load, _find_event, _log, _rounding
+from chainrun.solver._events import (
+    _contact_at, _contact_load, _find_event, _load_rate, _log, _rounding,
+)
 from chainrun.solver._forces import _damping
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
@@ -142,28 +144,6 @@ def _commit_dissipation(S):
             S.cp[C_DISS, j] += d
             step += d
     S.fs[F_DISS] += step
-
-
-@kernel
-def _load_residual(S, j, c, w, a):
-    """(load, its rate, its rounding) of damped contact j at compression c, rate w and
-    relative acceleration a: Newton's residual where a step lands on an unload or a
-    reload."""
-    cp = S.cp
-    kappa = cp[C_KAPPA, j]
-    al = cp[C_ALPHA, j]
-    eta = cp[C_ETA, j]
-    beta = cp[C_BETA, j]
-    g = _contact_load(S, j, c, w)
-    ac = abs(c)
-    dg = kappa * al * ac ** (al - 1.0) * w
-    if beta == 0.0:
-        dg += eta * a
-        damp = eta * w
-    else:
-        dg += eta * (beta * ac ** (beta - 1.0) * w * w + ac ** beta * a)
-        damp = eta * ac ** beta * w
-    return g, dg, 16.0 * EPS * (kappa * ac ** al + abs(damp))
 
 
 @entry
@@ -540,7 +520,7 @@ def advance(S):
                 xl, vl, al = _end_ball(S, j, t + hev)
                 xr, vr, ar = _end_ball(S, j + 1, t + hev)
                 if kind == EV_UNLOAD or kind == EV_RELOAD:
-                    res, w, tol = _load_residual(S, j, xl - xr, vl - vr, al - ar)
+                    res, w, tol = _load_rate(S, j, xl - xr, vl - vr, al - ar)
                 else:
                     res = (xl - xr) - lev
                     w = vl - vr
