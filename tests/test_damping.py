@@ -273,3 +273,21 @@ def test_damped_lines_against_the_reference_solver(seed):
     np.testing.assert_allclose(sol.velocities, ref.velocities, atol=1e-9 * scale)
     e0 = float(line_kinetic_energy(line.velocity, line.mass))
     assert sol.dissipated_energy == pytest.approx(ref.dissipated, abs=1e-10 * e0)
+    # every unloading located, at the same instants: the reference logs it as an
+    # opening of a contact still compressed (by as little as rounding, where the load
+    # reaches 0 just as the compression does)
+    unloads = {(int(j), t) for j, t, k in zip(sol.event_contact, sol.event_time,
+                                              sol.event_kind) if k == EventKind.UNLOAD}
+    ends = [(int(j), t, c) for j, t, k, c in zip(ref.event_contact, ref.event_time,
+                                                 ref.event_kind, ref.event_compression)
+            if k == -1]
+    assert unloads
+
+    def near(j, t, events):
+        return any(j == i and abs(t - u) <= 1e-9 * (1 + t) for i, u, *_ in events)
+
+    for j, t in unloads:
+        assert near(j, t, ends), (j, t)
+    for j, t, c in ends:
+        if c > 1e-9:
+            assert near(j, t, unloads), (j, t, c)

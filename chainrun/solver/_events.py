@@ -177,7 +177,9 @@ def _unload_event(S, j, hcap):
     for i in range(1, N_SAMPLES + 1):
         tb = min(i / N_SAMPLES, hcap)
         gb, cb_ = _load_at(S, j, tb)
-        if not held and ga >= 0.0 and gb < 0.0:
+        # (a load reaching exactly 0 is an unload: the compression's own opening at the
+        # cap, where it is exactly 0, may come just after the unload)
+        if not held and ga > 0.0 and gb <= 0.0:
             return _load_crossing(S, j, ta, tb, ga, gb), EV_UNLOAD
         if held and ga <= 0.0 and gb > 0.0 and cb_ > 0.0:
             return _load_crossing(S, j, ta, tb, ga, gb), EV_RELOAD
