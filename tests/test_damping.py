@@ -8,6 +8,7 @@ code with the solver.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -291,3 +292,23 @@ def test_damped_lines_against_the_reference_solver(seed):
     for j, t, c in ends:
         if c > 1e-9:
             assert near(j, t, unloads), (j, t, c)
+
+
+def test_a_load_that_touches_zero_and_rises_reloads():
+    """Twelve damped beads moving together onto a damped wall: the first contact's load
+    falls to 0 and turns back up at one instant (the step that lands there ends within
+    rounding of 0, with no crossing left to find). The contact must bear its load again
+    (unload and reload at that instant), not stay held while it pushes, which
+    left the cluster without a force and its steps growing without end."""
+    from chainrun.config import load_experiment
+
+    path = Path(__file__).parents[1] / "configs" / "gallery" / "wall-column-damped.toml"
+    spec = next(s for s in load_experiment(path).runs() if s.n == 12)
+    sol = simulate_line(spec.line, max_events=1000)
+    assert sol.terminal
+    kinds = sol.event_kind[sol.event_contact == 0]
+    assert EventKind.RELOAD in kinds
+    i = int(np.flatnonzero(kinds == EventKind.RELOAD)[0])
+    assert kinds[i - 1] == EventKind.UNLOAD
+    assert sol.diagnostics.energy_error < 1e-10
+    assert sol.diagnostics.momentum_error < 1e-10

@@ -362,6 +362,34 @@ def _settle(S):
 
 
 @kernel
+def _loads_due(S):
+    """Switch the damped contacts whose load is on the wrong side of 0 and moving away
+    from it: held at 0 but pushing and rising, or bearing it but pulling and falling.
+
+    A step that lands on an unload (or a reload) ends within rounding of the load's 0,
+    on either side; where the load turns there, touching 0 and going back, no crossing
+    is left for the next step to find, and the contact would stay held while it
+    pushes. The load's rate at the step's end says which way it goes.
+    """
+    for c in range(S.ints[I_NCL]):
+        lo = S.clo[c]
+        o = S.coff[c] - lo
+        for j in range(lo, S.chi[c]):
+            if S.cp[C_ETA, j] == 0.0:
+                continue
+            p = o + j
+            cj = S.X[p] - S.X[p + 1]
+            if not cj > 0.0:
+                continue
+            g, dg, _r = _load_rate(S, j, cj, S.V[p] - S.V[p + 1], S.A[p] - S.A[p + 1])
+            held = S.cp[C_HELD, j] != 0.0
+            if (held and g > 0.0 and dg > 0.0) or (not held and g < 0.0 and dg < 0.0):
+                if S.ev_t.shape[0] - S.ints[I_NEV] < 1:
+                    return  # (the log is full: the next pass switches it)
+                _apply_event(S, j, EV_UNLOAD if not held else EV_RELOAD)
+
+
+@kernel
 def _post_step(S):
     """After an accepted step or jump: season contacts, then apply its event or release contacts."""
     if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
@@ -380,6 +408,8 @@ def _post_step(S):
             return False
     if S.ints[I_DIRTY] == 1:
         return _settle(S)
+    if S.ints[I_DAMPED] == 1 and S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
+        _loads_due(S)  # (the compact arrays are current: no change of structure)
     return True
 
 
@@ -485,7 +515,9 @@ def advance(S):
             err = _step(S, h)
             S.fs[F_HLAST] = h
             if not np.isfinite(err):
-                if h < 1e-12 * max(1.0, abs(t)):
+                if h < 1e-12 * max(1.0, abs(t)) or not np.isfinite(h):
+                    # (an infinite step: a cluster whose forces all vanish, grown
+                    # without bound, would never end)
                     return ST_NON_FINITE
                 h *= 0.2
                 S.ints[I_REJ] += 1
