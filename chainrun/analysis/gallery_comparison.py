@@ -25,7 +25,7 @@ __all__ = ["COLUMNS", "GALLERY_PRINTED", "gallery_comparison", "status"]
 COLUMNS = ("key", "item", "where", "quantity", "published", "computed", "status", "note")
 
 _HS = "Hinch & Saint-Jean (1999)"
-_DARAIO = "Daraio et al., PRE 73, 026610 (2006), as quoted in issue 20"
+_DARAIO = "Daraio et al., PRE 73, 026610 (2006), quoting Nesterenko (their paper not at hand)"
 _CHOSEN = ("No steel-on-steel restitution could be read from a measurement at hand, so "
            "e = 0.95 is a chosen value (within the 0.9-0.95 usually quoted for steel "
            "balls at these speeds), not a measured one.")
