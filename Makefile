@@ -15,7 +15,7 @@ help:
 	@echo "              (make -j2 figures runs independent experiments side by side)"
 	@echo "make gallery  the published experiments beyond the paper (docs/gallery/) into results/"
 
-# The solver is compiled for this machine once, here, into its cache (about 35 s on two
+# The solver is compiled for this machine once, here, into its cache (about 55 s on two
 # cores): a first `chainrun simulate` then starts at once.
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
