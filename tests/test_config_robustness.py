@@ -121,9 +121,13 @@ def test_yaml_merge_key_bomb():
     text = "a0: &a0 {k: 1}\n" + "".join(
         f"a{i}: &a{i} {{<<: [" + ", ".join([f"*a{i - 1}"] * 9) + "]}\n" for i in range(1, 10))
     start = time.perf_counter()
-    (line,) = problems(YCHAIN + text, "yaml")
+    lines = problems(YCHAIN + text, "yaml")
     assert time.perf_counter() - start < 2.0
-    assert line == "line 8: more than 10000 entries after merging '<<' keys (column 5)"
+    # PyYAML before 6.0.4 copies every merged entry (9**9 here) and the loader stops it
+    # at MAX_MERGED; from 6.0.4 PyYAML merges each key once, and the anchors' tables
+    # are plain unknown keys
+    limit = ["line 8: more than 10000 entries after merging '<<' keys (column 5)"]
+    assert lines == limit or lines == [f"a{i}: unknown key" for i in range(10)]
     merged = YCHAIN.replace("chain: {n: 3, k: 1, alpha: 1.5}",
                             "base: &b {n: 3, k: 1}\nchain: {<<: *b, alpha: 1.5}")
     assert problems(merged, "yaml") == ["base: unknown key"]
