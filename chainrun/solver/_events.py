@@ -400,7 +400,7 @@ def _find_event(S):
                 blev = lev
     if S.ints[I_DAMPED] == 1:
         # the kinks of the damped forces inside the clusters. A load whose ends are on
-        # the side the contact is on, by more than twice what a parabola through its
+        # the side the contact is on, by four times what a parabola through its
         # ends' rates could dip (h |g'_1 - g'_0| / 8), is not sampled
         for c in range(S.ints[I_NCL]):
             lo = S.clo[c]
