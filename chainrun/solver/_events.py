@@ -61,8 +61,9 @@ def _contact_end(S, j, th):
 
 
 @kernel
-def _crossing(S, j, ta, tb, ca, cb_, level):
-    """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi."""
+def _crossing(S, j, ta, tb, ca, cb_, level, load=False):
+    """Root of c_j(theta) = level in [ta, tb] (bracketed), by safeguarded regula falsi;
+    with ``load``, of contact j's damped load instead (ca, cb_ its values, level 0)."""
     fa = ca - level
     fb = cb_ - level
     side = 0
@@ -72,8 +73,7 @@ def _crossing(S, j, ta, tb, ca, cb_, level):
         tm = tb - fb * (tb - ta) / (fb - fa) if fb != fa else 0.5 * (ta + tb)
         if not (tm > ta and tm < tb):
             tm = 0.5 * (ta + tb)
-        cm, _w, _s = _contact_at(S, j, tm)
-        fm = cm - level
+        fm = (_load_at(S, j, tm)[0] if load else _contact_at(S, j, tm)[0]) - level
         if fm == 0.0:
             return tm
         if (fm > 0.0) == (fa > 0.0):
@@ -107,35 +107,6 @@ def _load_at(S, j, th):
     else:
         c, w, _s = _contact_at(S, j, th)
     return _contact_load(S, j, c, w), c
-
-
-@kernel
-def _load_crossing(S, j, ta, tb, ga, gb):
-    """Root of contact j's load (bracketed in [ta, tb]), by safeguarded regula falsi;
-    the side past it, as _crossing."""
-    side = 0
-    for _ in range(100):
-        if tb - ta <= 4.0 * EPS * max(1.0, tb):
-            break
-        tm = tb - gb * (tb - ta) / (gb - ga) if gb != ga else 0.5 * (ta + tb)
-        if not (tm > ta and tm < tb):
-            tm = 0.5 * (ta + tb)
-        gm = _load_at(S, j, tm)[0]
-        if gm == 0.0:
-            return tm
-        if (gm > 0.0) == (ga > 0.0):
-            ta = tm
-            ga = gm
-            if side == -1:
-                gb *= 0.5
-            side = -1
-        else:
-            tb = tm
-            gb = gm
-            if side == 1:
-                ga *= 0.5
-            side = 1
-    return tb
 
 
 @kernel
@@ -180,9 +151,9 @@ def _unload_event(S, j, hcap):
         # (a load reaching exactly 0 is an unload: the compression's own opening at the
         # cap, where it is exactly 0, may come just after the unload)
         if not held and ga > 0.0 and gb <= 0.0:
-            return _load_crossing(S, j, ta, tb, ga, gb), EV_UNLOAD
+            return _crossing(S, j, ta, tb, ga, gb, 0.0, True), EV_UNLOAD
         if held and ga <= 0.0 and gb > 0.0 and cb_ > 0.0:
-            return _load_crossing(S, j, ta, tb, ga, gb), EV_RELOAD
+            return _crossing(S, j, ta, tb, ga, gb, 0.0, True), EV_RELOAD
         ta = tb
         ga = gb
         if tb >= hcap:
