@@ -21,7 +21,7 @@ only those above it::
     _projection   each cluster's internal energy, restored at changes of structure
     _clusters     which balls move together, packed into the compact arrays
     _events       locating the first contact event in a step
-    _loop         the step loop: ``advance`` and ``_snapshot``, the entry points
+    _loop         the step loop: ``advance``, the one entry point
 
 Equations, for balls n = 1..N (``model``; in the paper's units every coefficient is 1
 and there is no gap, wall or force)::

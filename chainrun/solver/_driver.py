@@ -46,9 +46,16 @@ def load_kernels(S: _state.State | None = None) -> None:
     """
     if S is None:
         S = _new_state(2, 1, 1.5, DEFAULT_RTOL, None, None)
-    _jit.prepare_all([(_loop.advance, (S,)), (_loop._snapshot, (S, 0.0)),
-                      (_loop._sample, (S, 0.0, np.zeros(1, np.int64), np.zeros(1),
-                                       np.zeros(1)))])
+    _jit.prepare_all([(_loop.advance, (S,))])
+
+
+def _evaluate(S: _state.State, task: int, t: float) -> None:
+    """The state at (internal) time t, inside the last step or in free flight, into
+    (S.ox, S.ov): every ball's (TASK_SNAPSHOT), or the balls of S.probe, in order
+    (TASK_SAMPLE)."""
+    S.ints[_state.I_TASK] = task
+    S.fs[_state.F_TTASK] = t
+    _loop.advance(S)
 
 
 def release_compression(alpha, floor, stiffness=1.0, inverse_mass=2.0):
@@ -307,7 +314,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
         hp_s=np.zeros(2 * nb, np.int64),
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
-        ox=np.zeros(nb), ov=np.zeros(nb),
+        ox=np.zeros(nb), ov=np.zeros(nb), probe=np.zeros(0, np.int64),
         freed=freed, jbuf=np.zeros(nb, np.int64),
         fs=fs, ints=ints,
     )
@@ -346,8 +353,6 @@ class _Sensors:
         inner = balls - 1 + P.lw  # internal indices
         near = np.concatenate([inner - 1, inner, inner + 1])
         self.probe = np.unique(near[(near >= 0) & (near < P.nb)]).astype(np.int64)
-        self.buffer = np.empty(self.probe.size)
-        self.vbuffer = np.empty(self.probe.size)
         self.times, self.rows, self.vrows = [], [], []
         self.count = 0
 
@@ -429,6 +434,7 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         S.ints[_state.I_NEV] = 0
 
     sensing = _Sensors(sensor_balls, None if sensor_dt is None else sensor_dt / tscale, P)
+    S = S._replace(probe=sensing.probe)
     nout = 0
 
     def request():
@@ -459,8 +465,8 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
                 if kind == 1:
                     sensing.take(tout, S.ox[sensing.probe], S.ov[sensing.probe])
                 else:
-                    _loop._sample(S, tout, sensing.probe, sensing.buffer, sensing.vbuffer)
-                    sensing.take(tout, sensing.buffer, sensing.vbuffer)
+                    _evaluate(S, _state.TASK_SAMPLE, tout)
+                    sensing.take(tout, S.ox[:S.probe.size], S.ov[:S.probe.size])
             request()
             if on_progress is not None:
                 on_progress(float(S.fs[_state.F_T]) * tscale)
@@ -484,16 +490,15 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     t_final = float(S.fs[_state.F_T])
     # snapshots after the terminal state are free flight; the kernel evaluates them
     while status == _state.ST_TERMINAL and nout < nt:
-        _loop._snapshot(S, inner_times[nout])
+        _evaluate(S, _state.TASK_SNAPSHOT, inner_times[nout])
         emit(nout, times[nout])
         nout += 1
     # samples up to the end of the run (its last instant included)
     while sensing.next_time() <= t_final:
-        _loop._sample(S, sensing.next_time(), sensing.probe, sensing.buffer,
-                      sensing.vbuffer)
-        sensing.take(sensing.next_time(), sensing.buffer, sensing.vbuffer)
+        _evaluate(S, _state.TASK_SAMPLE, sensing.next_time())
+        sensing.take(sensing.next_time(), S.ox[:S.probe.size], S.ov[:S.probe.size])
     sensor_time, sensor_force = sensing.forces()
-    _loop._snapshot(S, t_final)
+    _evaluate(S, _state.TASK_SNAPSHOT, t_final)
     y_final = S.ox.copy()
     v_final = S.ov.copy()
     wall = time.perf_counter() - wall0

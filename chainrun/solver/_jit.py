@@ -1,8 +1,9 @@
 """How the solver's kernels are compiled, cached and loaded.
 
 Two decorators: ``kernel`` for functions called only from other kernels (no Python
-wrapper, no cache entry of their own: their code is linked into the entry points that
-call them) and ``entry`` for the few that Python calls (cached). Both are compiled
+wrapper, no cache entry of their own: their code is linked into the entry point that
+calls them) and ``entry`` for what Python calls (cached; the solver has one,
+``_loop.advance``, so that a run loads one library). Both are compiled
 without numba's reference counting: the kernels allocate nothing.
 
 The cache lives in a folder of its own, named by a hash of the solver's sources and of

@@ -1,9 +1,11 @@
-"""The step loop: ``advance``, which runs the solver, and ``_snapshot``.
+"""The step loop: ``advance``, which runs the solver and evaluates its state.
 
 The kernels own the numerics and nothing else: they never see files or Python
 objects, and report through integer status codes (``_state.ST_*``) that ``_driver``
-maps to named outcomes. ``advance`` and ``_snapshot`` are the two entry points that
-Python calls (cached, see ``_jit``); everything else is a ``kernel`` linked into them.
+maps to named outcomes. ``advance`` is the one entry point that Python calls (cached,
+see ``_jit``); everything else is a ``kernel`` linked into it. One entry point is one
+compiled library to load at start-up: a snapshot or a sample of a few balls
+(``_snapshot``, ``_sample``) is a task ``advance`` runs when ``ints[I_TASK]`` asks.
 
 One pass of the loop rebuilds the compact arrays after a change of structure
 (``_clusters``), takes snapshots due inside the last step, applies the event or
@@ -28,11 +30,11 @@ from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
     C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
     FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
-    F_TPREV, F_TSAME, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED, I_HAVEOUT,
-    I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS, I_TAY, KV_DS,
-    PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT,
-    ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, W_ETA, W_HELD, YIELD_STEPS, _flight,
-    _free_at, _tw,
+    F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
+    I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS,
+    I_TASK, I_TAY, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
+    ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
+    TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import (
     _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at,
@@ -146,7 +148,7 @@ def _commit_dissipation(S):
     S.fs[F_DISS] += step
 
 
-@entry
+@kernel
 def _snapshot(S, tout):
     """Fill (ox, ov) with the state at tout, inside the last step or in free flight,
     and fs[F_DOUT] with the energy dissipated by then."""
@@ -159,13 +161,14 @@ def _snapshot(S, tout):
         S.fs[F_DOUT] = _dissipated_at(S, th)
 
 
-@entry
-def _sample(S, tout, balls, xs, vs):
-    """Positions and velocities at tout of the balls listed (0-based) into xs, vs: a
-    snapshot of those balls alone, at a cost in their number, not in N."""
+@kernel
+def _sample(S, tout):
+    """Positions and velocities at tout of the balls listed in S.probe (0-based) into
+    ox, ov, in their order: a snapshot of those balls alone, at a cost in their
+    number, not in N."""
     th = _output_phase(S, tout)
-    for i in range(balls.shape[0]):
-        xs[i], vs[i] = _state_at(S, balls[i], tout, th)
+    for i in range(S.probe.shape[0]):
+        S.ox[i], S.ov[i] = _state_at(S, S.probe[i], tout, th)
 
 
 @kernel
@@ -427,9 +430,20 @@ def advance(S):
     """Run until something needs the driver; return a status code (ST_*).
 
     The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
-    snapshot (2 for a sample of a few balls, which it then takes with ``_sample``), empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW
-    and calls again.
+    snapshot (2 for a sample of a few balls, which it then asks for as a task),
+    empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW and calls
+    again. With ``ints[I_TASK]`` set, the call evaluates the state at ``fs[F_TTASK]``
+    instead (TASK_SNAPSHOT: every ball into ox, ov; TASK_SAMPLE: the balls of probe)
+    and returns ST_OUTPUT.
     """
+    task = S.ints[I_TASK]
+    if task != TASK_RUN:
+        S.ints[I_TASK] = TASK_RUN
+        if task == TASK_SNAPSHOT:
+            _snapshot(S, S.fs[F_TTASK])
+        else:
+            _sample(S, S.fs[F_TTASK])
+        return ST_OUTPUT
     nsteps = 0
     while True:
         if S.ints[I_DIRTY] == 1:

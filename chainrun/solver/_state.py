@@ -120,16 +120,22 @@ YIELD_STEPS = 20000
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
     F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_JL, F_JR, F_JSL, \
-    F_JSR, F_NFLOAT = range(22)
+    F_JSR, F_TTASK, F_NFLOAT = range(23)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_NINT = range(30)
+    I_TASK, I_NINT = range(31)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
+
+# ---- what a call of ``advance`` does (I_TASK, at the time F_TTASK) --------------------
+# ``advance`` is the kernels' one entry point (one compiled library to load): besides
+# running, it evaluates the state at a time inside the last step or in free flight,
+# every ball's into (ox, ov), or the balls listed in ``probe`` into ox[:P], ov[:P]
+TASK_RUN, TASK_SNAPSHOT, TASK_SAMPLE = range(3)
 
 # ---- the force laws (I_MODE) ----------------------------------------------------------
 MODE_LINEAR = 0  # every contact alpha = 1
@@ -178,8 +184,8 @@ State = namedtuple(
         "hp_t", "hp_j", "hp_s",
         # event log buffer
         "ev_t", "ev_j", "ev_k",
-        # snapshot buffer
-        "ox", "ov",
+        # snapshot buffer, and the balls a sample evaluates (TASK_SAMPLE)
+        "ox", "ov", "probe",
         # scratch lists of ball / contact indices, shape (N,)
         "freed", "jbuf",
         # scalars
