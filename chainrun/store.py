@@ -203,6 +203,15 @@ def _deflate_chunk(chunk: np.ndarray) -> bytes:
     return zlib.compress(np.ascontiguousarray(planes), _GZIP_LEVEL)
 
 
+def _bits(data: np.ndarray) -> np.ndarray | None:
+    """``data``'s elements as unsigned integers of the same size, flattened: equal where
+    their bytes are (a NaN equals itself, -0.0 is not 0.0); None for other sizes."""
+    size = data.dtype.itemsize
+    if size not in (1, 2, 4, 8):
+        return None
+    return np.ascontiguousarray(data).reshape(-1).view(f"u{size}")
+
+
 def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -> None:
     """Write ``data`` into ``ds[lead + (...)]`` chunk by chunk, compressing on every core.
 
@@ -212,20 +221,21 @@ def _write_deflated(ds: h5py.Dataset, lead: tuple[int, ...], data: np.ndarray) -
     each is stored as it is (``write_direct_chunk``). The edge chunk is padded with
     zeros to the full chunk shape, as HDF5 stores it.
 
-    A chunk whose bytes are all zero, the dataset's fill value, is not stored at all:
-    HDF5 reads an unstored chunk as the fill value. Ahead of a wave the balls are at
-    rest where they started, so a snapshot of a long line is mostly such chunks. (Only
-    for chunks not stored before, which is how the writers here use it.)
+    A chunk made of the dataset's fill value alone is not stored at all: HDF5 reads an
+    unstored chunk as the fill value. Ahead of a wave the balls are at rest where they
+    started, so a snapshot of a long line is mostly chunks of zeros; the masses of a
+    uniform line are one value, the fill value ``_array`` gives them. (Only for chunks
+    not stored before, which is how the writers here use it.)
     """
     global _deflate_pool
     chunk_shape = ds.chunks[len(lead):]
     step = chunk_shape[0]
     data = np.asarray(data, dtype=ds.dtype)
-    skip_blank = not np.asarray([ds.fillvalue], dtype=ds.dtype).view(np.uint8).any()
+    fill = _bits(np.asarray([ds.fillvalue], dtype=ds.dtype))
 
     def pack(start: int) -> bytes | None:
         part = np.ascontiguousarray(data[start:start + step])
-        if skip_blank and not part.view(np.uint8).any():
+        if fill is not None and np.all(_bits(part) == fill):
             return None
         if part.shape != chunk_shape:
             full = np.zeros(chunk_shape, dtype=ds.dtype)
@@ -252,9 +262,12 @@ def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],
     """A fixed-size dataset, chunked and compressed when large, with dims attached."""
     data = np.asarray(data, dtype=dtype)
     if data.size > COMPRESS_ABOVE and data.dtype.kind in "biuf":
+        # one value throughout (a uniform line's masses): the fill value, stored nowhere
+        bits = _bits(data)
+        fill = data.reshape(-1)[0] if bits is not None and np.all(bits == bits[0]) else None
         ds = group.create_dataset(name, shape=data.shape, dtype=data.dtype,
                                   chunks=(min(data.shape[0], BALL_CHUNK),) + data.shape[1:],
-                                  **_GZIP)
+                                  fillvalue=fill, **_GZIP)
         _write_deflated(ds, (), data)
     else:
         ds = group.create_dataset(name, data=data)

@@ -378,6 +378,18 @@ def test_large_arrays_are_chunked_and_compressed(tmp_path):
         np.testing.assert_array_equal(f["results/ball"][:], np.arange(1, n + 1))
         np.testing.assert_array_equal(f["events/time"][:], sol.event_time)
         np.testing.assert_array_equal(f["events/contact"][:], sol.event_contact)
+        # the paper's line has one mass, one stiffness, ...: each is the fill value of
+        # its dataset and stored nowhere, and reads back as that value
+        for name, value in (("mass", 1.0), ("stiffness", 1.0), ("alpha", 1.5),
+                            ("gap", 0.0), ("force", 0.0)):
+            ds = f[f"model/{name}"]
+            assert ds.id.get_num_chunks() == 0, name
+            np.testing.assert_array_equal(ds[:], np.full(ds.shape, value))
+        # the initial velocities are not one value: the chunk of the moving balls is
+        # stored, the one of balls at rest is left to the fill value 0
+        velocity = f["model/velocity"]
+        assert velocity.id.get_num_chunks() == 1
+        np.testing.assert_array_equal(velocity[:], np.r_[np.ones(2), np.zeros(n - 2)])
         np.testing.assert_array_equal(f["events/kind"][:], sol.event_kind)
 
 
