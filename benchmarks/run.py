@@ -472,7 +472,36 @@ def section_compile(procs: Processes) -> dict:
         out["compile_wall"] = cold.wall - warm.wall
         out["compile_cpu"] = cold.cpu - warm.cpu
     log(f"  cold {fmt_t(cold.wall)} s (cpu {fmt_t(cold.cpu)} s), warm {fmt_t(warm.wall)} s")
+    out["numba_floor"] = _numba_floor(procs.scratch)
+    log(f"  numba's own start-up: {fmt_t(min(out['numba_floor']))} s at best")
     return out
+
+
+_FLOOR_SCRIPT = """
+import numba
+@numba.njit(cache=True)
+def f(x):
+    return x + 1.0
+f(1.0)
+"""
+
+
+def _numba_floor(scratch: Path, runs: int = 5) -> list[float]:
+    """Wall times of a Python process that loads one cached one-line numba function
+    and calls it: what any process running cached numba code pays before its own work
+    (the warm start-up's floor)."""
+    folder = Path(tempfile.mkdtemp(prefix="numba-floor-", dir=scratch))
+    script = folder / "floor.py"
+    script.write_text(_FLOOR_SCRIPT)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(folder / "cache"))
+    subprocess.run([sys.executable, str(script)], env=env, check=True)  # compiles, caches
+    walls = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, str(script)], env=env, check=True)
+        walls.append(time.perf_counter() - t0)
+    shutil.rmtree(folder, ignore_errors=True)
+    return walls
 
 
 def _peer_runners(mode: Mode, notes: list[str]) -> dict:
@@ -1087,6 +1116,11 @@ def report(res: dict) -> str:
                    f"{fmt_t(c['warm_wall'])} s (cpu {fmt_t(c['warm_cpu'])} s): compilation "
                    f"{fmt_t(c.get('compile_wall'))} s wall, {fmt_t(c.get('compile_cpu'))} s cpu"
                    + (f"  [{c['error']}]" if c.get("error") else ""))
+        if c.get("numba_floor"):
+            walls = c["numba_floor"]
+            out.append(f"  numba's own start-up, a process loading one cached one-line function: "
+                       f"{fmt_t(min(walls))} s at best, median {fmt_t(median(walls))} s "
+                       "(the warm run's floor)")
     p = res.get("peers")
     if p:
         out.append("")
