@@ -301,6 +301,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     ints[_state.I_LWALL] = P.lw
     ints[_state.I_RWALL] = P.rw
     ints[_state.I_LWL] = ints[_state.I_RWL] = -1
+    ints[_state.I_XEND] = 1
     ints[_state.I_MAXEV] = -1 if max_events is None else int(max_events)
     return _state.State(
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),

@@ -32,12 +32,12 @@ from chainrun.solver._state import (
     FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
     F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
     I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS,
-    I_TASK, I_TAY, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
+    I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
     ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
     TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import (
-    _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at,
+    _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at, _taylor_error,
 )
 
 
@@ -526,8 +526,19 @@ def advance(S):
         S.fs[F_TPREV] = t
         S.ints[I_JUMP] = 0
         while True:
-            err = _step(S, h)
-            S.fs[F_HLAST] = h
+            if tay:
+                # the series' truncation is known from h alone, and the event scan reads
+                # the few balls it needs from their series: the window is evaluated at
+                # h only if no event cuts the step (else at the event, by the landing)
+                S.fs[F_HLAST] = h
+                err = _taylor_error(S, h)
+                S.ints[I_XEND] = 0
+                th, j, kind, lev = _find_event(S)
+                if j < 0:
+                    err = _step(S, h)
+            else:
+                err = _step(S, h)
+                S.fs[F_HLAST] = h
             if not np.isfinite(err):
                 if h < 1e-12 * max(1.0, abs(t)) or not np.isfinite(h):
                     # (an infinite step: a cluster whose forces all vanish, grown
@@ -537,7 +548,8 @@ def advance(S):
                 S.ints[I_REJ] += 1
                 clipped = False
                 continue
-            th, j, kind, lev = _find_event(S)
+            if not tay:
+                th, j, kind, lev = _find_event(S)
             if err <= 1.0:
                 break
             S.ints[I_REJ] += 1

@@ -125,11 +125,15 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_TASK, I_NINT = range(31)
+    I_TASK, I_XEND, I_NINT = range(32)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
+
+# I_XEND: 1 when (X, V, A) hold the window at the end of the last step (or trial step);
+# 0 while a series step is tried before the window is evaluated (see _loop.advance):
+# the ends of the few balls the event scan reads come from their series then
 
 # ---- what a call of ``advance`` does (I_TASK, at the time F_TTASK) --------------------
 # ``advance`` is the kernels' one entry point (one compiled library to load): besides

@@ -31,7 +31,7 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
-    F_TPREV, I_DAMPED, I_DENSE, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT,
+    F_TPREV, I_DAMPED, I_DENSE, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT, I_XEND,
     MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
     _tw,
 )
@@ -189,6 +189,26 @@ def _taylor_step(S, h):
     for p in range(m):
         if not (np.isfinite(X[p]) and np.isfinite(V[p])):
             return np.inf
+    return _taylor_error(S, h)
+
+
+@kernel(fastmath={"contract"})
+def _taylor_end(S, p, h):
+    """(x, v) of compact ball p at the series step's end h: _taylor_step's evaluation
+    of the window for one ball, with its fused multiply-adds, so the same bits."""
+    T = S.TX
+    x = T[PT, p]
+    v = PT * T[PT, p]
+    for k in range(PT - 1, 0, -1):
+        x = x * h + T[k, p]
+        v = v * h + k * T[k, p]
+    return x * h + T[0, p], v
+
+
+@kernel(inline="always")
+def _taylor_error(S, h):
+    """The series step's truncation estimate / tolerance at h (from _taylor's last terms):
+    known before the window is evaluated."""
     h1 = abs(h) ** (PT - 2)
     return max(S.fs[F_QX1] * h1 * h * h, S.fs[F_QX2] * h1 * h,
                S.fs[F_QV1] * h1 * h, S.fs[F_QV2] * h1)
@@ -200,6 +220,7 @@ def _step(S, h):
 
     By the series if this step's start chose it (I_TAY), else by DOP853.
     """
+    S.ints[I_XEND] = 1
     if S.ints[I_TAY] == 1:
         return _taylor_step(S, h)
     m = S.ints[I_M]
@@ -273,10 +294,14 @@ def _poly(F, y0, p, th):
 @kernel(inline="always")
 def _ball_end(S, b, th):
     """(x, v) of ball b at the start (th <= 0) or the end (th >= 1) of the last step,
-    or at any th if it flies freely: no interpolant needed (inlined where it is hot)."""
+    or at any th if it flies freely: no interpolant needed (inlined where it is hot).
+    At the end of a series step whose window is not evaluated yet (I_XEND 0), from the
+    ball's series: the same operations as the window's evaluation, so the same bits."""
     p = S.bmap[b]
     if p >= 0:
         if th >= 1.0:
+            if S.ints[I_XEND] == 0:
+                return _taylor_end(S, p, S.fs[F_HLAST])
             return S.X[p], S.V[p]
         return S.X0[p], S.V0[p]
     return _free_at(S, b, S.fs[F_TPREV] + th * S.fs[F_HLAST])
