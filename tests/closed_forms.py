@@ -3,7 +3,9 @@
 The evidence here owes nothing to any solver: elastic collisions of two bodies, the
 duration of a contact with the force law ``k delta^alpha`` (through the Beta
 function), a linear pair's whole trajectory, a ball bouncing on a linear wall under
-a constant force, and the Hertz stiffness of two steel beads.
+a constant force, the restitution and duration of a linear spring-dashpot collision (the
+damped oscillator's explicit solution, its force's zero found by a root finder), and the
+Hertz stiffness of two steel beads.
 
 Duration of a contact. The compression delta of two bodies (reduced mass mu, relative
 speed u at first touch) obeys ``mu delta'' = -k delta^alpha`` while positive, so
@@ -24,6 +26,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 from scipy.special import beta
 
 #: Hertz (alpha = 3/2): t_c = HERTZ_DURATION * (mu/k)^(2/5) u^(-1/5), and
@@ -84,6 +87,25 @@ def linear_wall_bounce(m: float, k: float, f: float, u: float) -> float:
     w = math.sqrt(k / m)
     a = math.hypot(f / k, u / w)
     return (math.pi + 2.0 * math.asin(f / (k * a))) / w
+
+
+def oscillator(eta: float, k: float, mu: float, v: float) -> tuple[float, float]:
+    """(e, t_end) of mu x'' + eta x' + k x = 0, x(0) = 0, x'(0) = v, from its explicit
+    solution: the first zero of the force k x + eta x' found by brentq."""
+    gamma, w0 = eta / (2 * mu), math.sqrt(k / mu)
+    if gamma < w0:
+        w = math.sqrt(w0 * w0 - gamma * gamma)
+        x = lambda t: v / w * math.exp(-gamma * t) * math.sin(w * t)
+        dx = lambda t: v * math.exp(-gamma * t) * (math.cos(w * t) - gamma / w * math.sin(w * t))
+        hi = min(math.pi / w, 50.0 / w0)   # x > 0 and the force < 0 after its zero, until pi/w
+    else:
+        w = math.sqrt(gamma * gamma - w0 * w0)
+        x = lambda t: v / w * math.exp(-gamma * t) * math.sinh(w * t)
+        dx = lambda t: v * math.exp(-gamma * t) * (math.cosh(w * t) - gamma / w * math.sinh(w * t))
+        hi = 50.0 / w0
+    force = lambda t: k * x(t) + eta * dx(t)
+    t = brentq(force, 1e-12 / w0, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps)
+    return -dx(t) / v, t
 
 
 # A uniform chain of steel beads in SI units.

@@ -10,10 +10,11 @@ with scipy's order-8 Dormand-Prince pair (``scipy.integrate.DOP853``, the method
 ``solve_ivp(method="DOP853")``), event by event. (chainrun's kernels borrow the same
 DOP853 coefficients; the stepping, event logic and bookkeeping here are separate, and
 this solver is checked on its own against closed forms, Table 1 and exact symmetries
-in ``tests/test_reference_solver.py``.) ``reference_line`` extends it to the general
-line of ``chainrun.solver.model`` (masses, stiffnesses, exponents, gaps, positions,
-forces, walls; section below, tested in ``tests/test_reference_general.py``), and
-``random_line`` draws the short general lines the tests compare on.
+in ``tests/regression/test_reference_solver.py``.) ``reference_line`` extends it to the
+general line of ``chainrun.solver.model`` (masses, stiffnesses, exponents, gaps,
+positions, forces, walls; section below, tested in
+``tests/regression/test_reference_general.py``), and ``random_line`` draws the short
+general lines the tests compare on.
 
 Method
 ------
@@ -105,8 +106,8 @@ over the contacts as an extra component of the state (only for a damped line, so
 elastic one takes exactly its old steps): ``eta c^beta c'^2`` for an engaged contact,
 ``-kappa c^alpha c'`` for a loose one, whose stored energy is lost with it. Then
 ``line_energy + dissipated`` is the same at every instant. Checked in
-``tests/test_reference_damped.py``: two balls and a ball on a wall against the damped
-oscillator's explicit solution (e to 1e-10, durations to 1e-10 relative; measured 3e-15
+``tests/regression/test_reference_damped.py``: two balls and a ball on a wall against the
+damped oscillator's explicit solution (e to 1e-10, durations to 1e-10 relative; measured 3e-15
 and 1.5e-13), the nonlinear laws against ``chainrun.solver.restitution``'s scaled
 integration (1e-10), the energy balance on damped chains (1e-11; measured 1e-13), a
 force resuming at c > 0, and eta -> 0.

@@ -1,6 +1,6 @@
 """Experiment files at the edges: what fuzzing found, names, run ids and size limits.
 
-Each test of the first part is a case ``tests/test_fuzz.py`` found escaping
+Each test of the first part is a case ``tests/property/test_fuzz.py`` found escaping
 ``parse_experiment`` as another exception than ``ConfigError`` (or hanging), kept as
 a plain regression test.
 """

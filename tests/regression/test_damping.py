@@ -302,7 +302,7 @@ def test_a_load_that_touches_zero_and_rises_reloads():
     left the cluster without a force and its steps growing without end."""
     from chainrun.config import load_experiment
 
-    path = Path(__file__).parents[1] / "configs" / "gallery" / "wall-column-damped.toml"
+    path = Path(__file__).resolve().parents[2] / "configs" / "gallery" / "wall-column-damped.toml"
     spec = next(s for s in load_experiment(path).runs() if s.n == 12)
     sol = simulate_line(spec.line, max_events=1000)
     assert sol.terminal

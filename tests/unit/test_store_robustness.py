@@ -1,6 +1,6 @@
 """Reading bad files: truncated, foreign, other versions, damaged (chainrun.store).
 
-``tests/test_store.py`` covers one truncation (half the file), text, a missing file,
+``tests/unit/test_store.py`` covers one truncation (half the file), text, a missing file,
 foreign HDF5 (no format; format "foo"), version 2, run and index files confused and a
 missing dataset. This file adds truncation at many offsets, older versions and
 versions that are not integers, formats that are not text, every group and attribute

@@ -16,7 +16,7 @@ import chainrun.runner as runner
 from chainrun.cli import main
 from chainrun.store import read_index
 
-CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 #: Table 1 of the paper: final velocities of five Hertz spheres, K = 1..4 (columns).
 TABLE1 = {

@@ -16,7 +16,7 @@ The heavy artefacts (dense snapshots: sec5a, sec5b, fig10, fig11, sec5c) run onl
 
 Regenerate the reference after a deliberate change with::
 
-    make figures && .venv/bin/python tests/test_analysis.py --update results
+    make figures && .venv/bin/python tests/regression/test_analysis.py --update results
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from chainrun.config import load_experiment
 from chainrun.runner import simulate_experiment
 from chainrun.store import AnalysisData, read_analysis, read_run, write_analysis
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = ROOT / "tests" / "data" / "analysis_reference.json"
 
 #: Artefacts cheap enough to build in the test suite (no dense snapshots).
@@ -318,6 +318,6 @@ def update_reference(results: Path) -> None:
 
 if __name__ == "__main__":
     if len(sys.argv) != 3 or sys.argv[1] != "--update":
-        sys.exit("usage: python tests/test_analysis.py --update RESULTS")
+        sys.exit("usage: python tests/regression/test_analysis.py --update RESULTS")
     update_reference(Path(sys.argv[2]))
     print(f"wrote {REFERENCE}")

@@ -1,7 +1,7 @@
 """The test-only reference solver on damped lines (``reference.reference_line``).
 
 Evidence owed to nothing in chainrun's solver: the damped linear oscillator's explicit
-solution (its force's zero found by a root finder in ``test_restitution.oscillator``),
+solution (its force's zero found by a root finder in ``closed_forms.oscillator``),
 the energy balance kinetic + potential + dissipated = initial, the residual of the
 law at each located event, and the elastic reference as the damping vanishes.
 """
@@ -13,8 +13,8 @@ import pytest
 
 from chainrun.solver.model import Line, Wall
 from chainrun.solver.restitution import contact_duration, restitution
+from closed_forms import oscillator
 from reference import CLOSE, OPEN, line_energy, reference_line
-from test_restitution import oscillator
 
 
 def balance(line, sol) -> float:

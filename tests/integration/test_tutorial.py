@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from test_cli import TABLE1
 
-TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial.py"
+TUTORIAL = Path(__file__).resolve().parents[2] / "docs" / "tutorial.py"
 
 
 def test_the_tutorial_runs(tmp_path):

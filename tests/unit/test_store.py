@@ -22,7 +22,7 @@ from chainrun.config import RunSpec
 from chainrun.errors import StoreError
 from chainrun.solver import Diagnostics, EventKind, Outcome, Solution
 
-SCHEMA = Path(__file__).resolve().parents[1] / "docs" / "schema.md"
+SCHEMA = Path(__file__).resolve().parents[2] / "docs" / "schema.md"
 
 SOURCE = """\
 name: cradle

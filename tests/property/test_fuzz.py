@@ -9,7 +9,7 @@ or in a run whose files all lie inside the output folder.
 
 The default is a fast subset for CI. A long run::
 
-    CHAINRUN_FUZZ_EXAMPLES=20000 .venv/bin/python -m pytest tests/test_fuzz.py -n 2
+    CHAINRUN_FUZZ_EXAMPLES=20000 .venv/bin/python -m pytest tests/property/test_fuzz.py -n 2
 
 gives every test that many examples; the number of cases tried is printed at the end
 of the run (``fuzz: N cases tried``).

@@ -20,7 +20,7 @@ from chainrun.materials import MATERIALS
 from chainrun.solver import Diagnostics, Outcome, Solution, physics
 from chainrun.solver.model import Line, Wall, precompress, strikers
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "configs" / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "configs" / "examples"
 HEAD = 'name = "x"\n'
 
 

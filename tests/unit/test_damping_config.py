@@ -17,7 +17,7 @@ from click.testing import CliRunner
 from chainrun.cli import main
 from chainrun.config import SWEEPABLE_KEYS, parse_experiment
 from chainrun.errors import ConfigError
-from test_restitution import oscillator
+from closed_forms import oscillator
 
 HEAD = 'name = "x"\n'
 CHAIN = "[chain]\nn = 3\nk = 1\n"

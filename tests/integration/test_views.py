@@ -109,7 +109,7 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
     from chainrun.plotting.views import draw_sweep
     from chainrun.store import read_index
 
-    table1 = Path(__file__).resolve().parents[1] / "configs" / "table1.toml"
+    table1 = Path(__file__).resolve().parents[2] / "configs" / "table1.toml"
     out = tmp_path / "table1"
     runner = CliRunner()
     assert runner.invoke(main, ["simulate", str(table1), "-o", str(out)]).exit_code == 0

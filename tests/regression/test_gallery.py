@@ -23,7 +23,7 @@ from chainrun.solver import EventKind
 from chainrun.solver import restitution as two_body
 from chainrun.store import read_run
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 # ----------------------------------------------------------------------- the registry

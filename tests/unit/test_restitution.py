@@ -1,8 +1,9 @@
 """The two-body physics of a damped collision (``chainrun.solver.restitution``).
 
 Reference values come from the explicit solution of the damped oscillator (its force's
-zero found here by a root finder, not by the module's formulas), from the elastic
-closed forms of ``closed_forms.py``, and from first-order perturbation theory.
+zero found by a root finder in ``closed_forms.oscillator``, not by the module's
+formulas), from the elastic closed forms of ``closed_forms.py``, and from first-order
+perturbation theory.
 """
 
 from __future__ import annotations
@@ -11,30 +12,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 from scipy.special import beta as beta_fn
 
 from chainrun.solver import restitution as r
 from closed_forms import contact_duration as elastic_duration
-
-
-def oscillator(eta: float, k: float, mu: float, v: float) -> tuple[float, float]:
-    """(e, t_end) of mu x'' + eta x' + k x = 0, x(0) = 0, x'(0) = v, from its explicit
-    solution: the first zero of the force k x + eta x' found by brentq."""
-    gamma, w0 = eta / (2 * mu), math.sqrt(k / mu)
-    if gamma < w0:
-        w = math.sqrt(w0 * w0 - gamma * gamma)
-        x = lambda t: v / w * math.exp(-gamma * t) * math.sin(w * t)
-        dx = lambda t: v * math.exp(-gamma * t) * (math.cos(w * t) - gamma / w * math.sin(w * t))
-        hi = min(math.pi / w, 50.0 / w0)   # x > 0 and the force < 0 after its zero, until pi/w
-    else:
-        w = math.sqrt(gamma * gamma - w0 * w0)
-        x = lambda t: v / w * math.exp(-gamma * t) * math.sinh(w * t)
-        dx = lambda t: v * math.exp(-gamma * t) * (math.cosh(w * t) - gamma / w * math.sinh(w * t))
-        hi = 50.0 / w0
-    force = lambda t: k * x(t) + eta * dx(t)
-    t = brentq(force, 1e-12 / w0, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps)
-    return -dx(t) / v, t
+from closed_forms import oscillator
 
 
 @pytest.mark.parametrize("eta", [1e-3, 0.1, 0.7, 1.5, 2.0 * math.sqrt(0.6 * 2.5) * 0.999,

@@ -22,7 +22,7 @@ from chainrun.config import (
 from chainrun.errors import ConfigError
 from chainrun.solver import DEFAULT_RTOL
 
-CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 BASE_TOML = """\
 name = "demo"
@@ -447,5 +447,5 @@ def test_error_from_a_file_names_the_file(tmp_path):
 
 
 def test_module_is_free_of_click():
-    source = (Path(__file__).resolve().parents[1] / "chainrun" / "config.py").read_text()
+    source = (Path(__file__).resolve().parents[2] / "chainrun" / "config.py").read_text()
     assert "click" not in source
