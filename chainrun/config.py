@@ -35,7 +35,7 @@ The schema (TOML shown; YAML has the same structure)::
 
 Every problem in a file is reported at once, one line each naming the dotted key, as a
 ``chainrun.errors.ConfigError``; ``load_experiment`` and ``parse_experiment`` raise
-nothing else, whatever the text (``tests/test_fuzz.py`` checks it).
+nothing else, whatever the text (``tests/property/test_fuzz.py`` checks it).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Run it as ``python docs/tutorial.py [FOLDER]``; it writes into FOLDER (default:
 ``tutorial-output``) and prints what it finds. The test suite runs it
-(``tests/test_tutorial.py``), so every line here works as written.
+(``tests/integration/test_tutorial.py``), so every line here works as written.
 """
 
 import sys

@@ -122,10 +122,10 @@ def _table1() -> list[Printed]:
     from chainrun.analysis.hertz import TABLE1_PRINTED
 
     notes = {
-        (2, 4): "By the exact mirror symmetry v_n(K) = 1 - v_(N+1-n)(N-K) (tests/test_solver.py), "
-                "column K = 4 mirrors K = 1: the paper's own v_4 = 0.1270 (K = 1) gives "
-                "{table1/mirror_v_2_K4:.4f}, and chainrun gives {table1/v_2_K4:.5f}. The printed "
-                "0.8729 is one unit off in the last digit.",
+        (2, 4): "By the exact mirror symmetry v_n(K) = 1 - v_(N+1-n)(N-K) "
+                "(tests/regression/test_solver.py), column K = 4 mirrors K = 1: the paper's "
+                "own v_4 = 0.1270 (K = 1) gives {table1/mirror_v_2_K4:.4f}, and chainrun gives "
+                "{table1/v_2_K4:.5f}. The printed 0.8729 is one unit off in the last digit.",
         (3, 4): "By the mirror symmetry, v_3(K = 4) = 1 - v_3(K = 1) = 1 + 0.01446 = "
                 "{table1/v_3_K4:.5f}, which rounds to 1.014; the printed 1.015 is Table 1's "
                 "own -0.0145 (itself rounded) mirrored, 1.0145, rounded a second time.",

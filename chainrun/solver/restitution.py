@@ -66,7 +66,7 @@ in t_end; at small G the slope of 1 - e meets first-order perturbation theory,
 s_m = (p/2)^(1/p); for Kuwabara-Kono the constant 1.15344 of Schwager and Poeschel
 1998), to 1e-8. So e from the integration is trusted to 2e-12, and
 ``damping_for_restitution`` gives a damping whose e is the one asked for to that
-accuracy (``tests/test_restitution.py`` checks 1e-10 and speed independence to 1e-9).
+accuracy (``tests/unit/test_restitution.py`` checks 1e-10 and speed independence to 1e-9).
 
 References
 ----------
