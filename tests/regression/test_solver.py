@@ -336,6 +336,7 @@ def _stopped_state(n, k, alpha, t_end):
             return S
 
 
+@pytest.mark.slow  # the Python twins of the dense-output kernels compile first (~15 s)
 @pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
     (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0),  # one cluster; a 3-ball cluster and a long one
 ])
@@ -377,6 +378,7 @@ def _window_rhs(S, alpha):
     return rhs
 
 
+@pytest.mark.slow  # the Python twins of the series and step kernels compile first (~25 s)
 @pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
     (60, 1, 1.5, 20.0), (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0), (40, 2, 2.3, 12.0),
 ])
