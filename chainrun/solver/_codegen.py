@@ -165,7 +165,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
     """
     lanes = range(tile)
     if mixed:
-        name, args = "_series_orders_mixed", "TX, W, IM, AL, nc, m, unit"
+        name, args = "_series_orders_mixed", "TX, W, G, IM, AL, nc, m, unit"
         doc = "Orders 1 and up of the force series, each lane its own alpha (see _taylor)."
         head = [f"            a{i} = AL[t * SERIES_TILE + {i}]" for i in lanes]
         head += [f"            b{i} = a{i} + 1.0" for i in lanes]
@@ -175,7 +175,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         def term(acc, i):
             return f"                {acc}{i} += (b{i} * jk - 1.0) * W[c + {i}] * W[f + {i}]"
     else:
-        name, args = "_series_orders", "TX, W, IM, nc, m, alpha, unit"
+        name, args = "_series_orders", "TX, W, G, IM, nc, m, alpha, unit"
         doc = "Orders 1 and up of the force series of every contact lane (see _taylor)."
         head = []
         first = [f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes]
@@ -212,18 +212,24 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         *[term("e", i) for i in lanes],
         "            c = o + (f0 + k) * SERIES_TILE",
         f"            f = o + {2 * pt} * SERIES_TILE",
-        *[f"            W[c + {i}] = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
+        "            g = t * SERIES_TILE",
+        *[f"            e{i} = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
+        *[f"            W[c + {i}] = e{i}" for i in lanes],
+        *[f"            G[g + {i}] = e{i}" for i in lanes],
+        "        # the balls' terms from the forces, which G holds in one row: no branch",
         "        s = SERIES_SCALE[k]",
-        "        if unit:",
-        "            for p in range(m):",
-        "                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
-        "                fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
-        "                TX[k + 2, p] = (fl - fr) * s",
+        "        if nc == 0:  # (a lone ball: no force)",
+        "            TX[k + 2, 0] = 0.0",
+        "        elif unit:",
+        "            TX[k + 2, 0] = (0.0 - G[0]) * s",
+        "            for p in range(1, nc):",
+        "                TX[k + 2, p] = (G[p - 1] - G[p]) * s",
+        "            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s",
         "        else:",
-        "            for p in range(m):",
-        "                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0",
-        "                fr = W[_tw(p, f0 + k)] if p < nc else 0.0",
-        "                TX[k + 2, p] = (fl - fr) * s * IM[p]",
+        "            TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]",
+        "            for p in range(1, nc):",
+        "                TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]",
+        "            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]",
         "    # the compressions' last two orders, for the bounds (_series_bounds)",
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",

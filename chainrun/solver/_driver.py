@@ -175,7 +175,7 @@ def _alloc_window(cap: int) -> dict:
     return dict(
         cb=np.zeros(cap, np.int64),
         X=np.zeros(cap), V=np.zeros(cap), A=np.zeros(cap),
-        X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(cap),
+        X0=np.zeros(cap), V0=np.zeros(cap), A0=np.zeros(cap), XS=np.zeros(lanes),
         FS=np.zeros(cap), KV=np.zeros((_state.KV_DS + 1, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
         WP=np.zeros((_state.W_HELD + 1, lanes)),

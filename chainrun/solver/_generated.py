@@ -315,7 +315,7 @@ def _dense_rows(S, p):
 
 
 @kernel(fastmath={"contract"})
-def _series_orders(TX, W, IM, nc, m, alpha, unit):
+def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
@@ -401,33 +401,69 @@ def _series_orders(TX, W, IM, nc, m, alpha, unit):
                 e15 += w * W[c + 15] * W[f + 15]
             c = o + (f0 + k) * SERIES_TILE
             f = o + 48 * SERIES_TILE
-            W[c + 0] = (e0 + d0) * W[f + 0]
-            W[c + 1] = (e1 + d1) * W[f + 1]
-            W[c + 2] = (e2 + d2) * W[f + 2]
-            W[c + 3] = (e3 + d3) * W[f + 3]
-            W[c + 4] = (e4 + d4) * W[f + 4]
-            W[c + 5] = (e5 + d5) * W[f + 5]
-            W[c + 6] = (e6 + d6) * W[f + 6]
-            W[c + 7] = (e7 + d7) * W[f + 7]
-            W[c + 8] = (e8 + d8) * W[f + 8]
-            W[c + 9] = (e9 + d9) * W[f + 9]
-            W[c + 10] = (e10 + d10) * W[f + 10]
-            W[c + 11] = (e11 + d11) * W[f + 11]
-            W[c + 12] = (e12 + d12) * W[f + 12]
-            W[c + 13] = (e13 + d13) * W[f + 13]
-            W[c + 14] = (e14 + d14) * W[f + 14]
-            W[c + 15] = (e15 + d15) * W[f + 15]
+            g = t * SERIES_TILE
+            e0 = (e0 + d0) * W[f + 0]
+            e1 = (e1 + d1) * W[f + 1]
+            e2 = (e2 + d2) * W[f + 2]
+            e3 = (e3 + d3) * W[f + 3]
+            e4 = (e4 + d4) * W[f + 4]
+            e5 = (e5 + d5) * W[f + 5]
+            e6 = (e6 + d6) * W[f + 6]
+            e7 = (e7 + d7) * W[f + 7]
+            e8 = (e8 + d8) * W[f + 8]
+            e9 = (e9 + d9) * W[f + 9]
+            e10 = (e10 + d10) * W[f + 10]
+            e11 = (e11 + d11) * W[f + 11]
+            e12 = (e12 + d12) * W[f + 12]
+            e13 = (e13 + d13) * W[f + 13]
+            e14 = (e14 + d14) * W[f + 14]
+            e15 = (e15 + d15) * W[f + 15]
+            W[c + 0] = e0
+            W[c + 1] = e1
+            W[c + 2] = e2
+            W[c + 3] = e3
+            W[c + 4] = e4
+            W[c + 5] = e5
+            W[c + 6] = e6
+            W[c + 7] = e7
+            W[c + 8] = e8
+            W[c + 9] = e9
+            W[c + 10] = e10
+            W[c + 11] = e11
+            W[c + 12] = e12
+            W[c + 13] = e13
+            W[c + 14] = e14
+            W[c + 15] = e15
+            G[g + 0] = e0
+            G[g + 1] = e1
+            G[g + 2] = e2
+            G[g + 3] = e3
+            G[g + 4] = e4
+            G[g + 5] = e5
+            G[g + 6] = e6
+            G[g + 7] = e7
+            G[g + 8] = e8
+            G[g + 9] = e9
+            G[g + 10] = e10
+            G[g + 11] = e11
+            G[g + 12] = e12
+            G[g + 13] = e13
+            G[g + 14] = e14
+            G[g + 15] = e15
+        # the balls' terms from the forces, which G holds in one row: no branch
         s = SERIES_SCALE[k]
-        if unit:
-            for p in range(m):
-                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-                TX[k + 2, p] = (fl - fr) * s
+        if nc == 0:  # (a lone ball: no force)
+            TX[k + 2, 0] = 0.0
+        elif unit:
+            TX[k + 2, 0] = (0.0 - G[0]) * s
+            for p in range(1, nc):
+                TX[k + 2, p] = (G[p - 1] - G[p]) * s
+            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
         else:
-            for p in range(m):
-                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-                TX[k + 2, p] = (fl - fr) * s * IM[p]
+            TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
+            for p in range(1, nc):
+                TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
+            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
@@ -435,7 +471,7 @@ def _series_orders(TX, W, IM, nc, m, alpha, unit):
 
 
 @kernel(fastmath={"contract"})
-def _series_orders_mixed(TX, W, IM, AL, nc, m, unit):
+def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
     """Orders 1 and up of the force series, each lane its own alpha (see _taylor)."""
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
     f0 = 25  # row of f_0
@@ -552,33 +588,69 @@ def _series_orders_mixed(TX, W, IM, AL, nc, m, unit):
                 e15 += (b15 * jk - 1.0) * W[c + 15] * W[f + 15]
             c = o + (f0 + k) * SERIES_TILE
             f = o + 48 * SERIES_TILE
-            W[c + 0] = (e0 + d0) * W[f + 0]
-            W[c + 1] = (e1 + d1) * W[f + 1]
-            W[c + 2] = (e2 + d2) * W[f + 2]
-            W[c + 3] = (e3 + d3) * W[f + 3]
-            W[c + 4] = (e4 + d4) * W[f + 4]
-            W[c + 5] = (e5 + d5) * W[f + 5]
-            W[c + 6] = (e6 + d6) * W[f + 6]
-            W[c + 7] = (e7 + d7) * W[f + 7]
-            W[c + 8] = (e8 + d8) * W[f + 8]
-            W[c + 9] = (e9 + d9) * W[f + 9]
-            W[c + 10] = (e10 + d10) * W[f + 10]
-            W[c + 11] = (e11 + d11) * W[f + 11]
-            W[c + 12] = (e12 + d12) * W[f + 12]
-            W[c + 13] = (e13 + d13) * W[f + 13]
-            W[c + 14] = (e14 + d14) * W[f + 14]
-            W[c + 15] = (e15 + d15) * W[f + 15]
+            g = t * SERIES_TILE
+            e0 = (e0 + d0) * W[f + 0]
+            e1 = (e1 + d1) * W[f + 1]
+            e2 = (e2 + d2) * W[f + 2]
+            e3 = (e3 + d3) * W[f + 3]
+            e4 = (e4 + d4) * W[f + 4]
+            e5 = (e5 + d5) * W[f + 5]
+            e6 = (e6 + d6) * W[f + 6]
+            e7 = (e7 + d7) * W[f + 7]
+            e8 = (e8 + d8) * W[f + 8]
+            e9 = (e9 + d9) * W[f + 9]
+            e10 = (e10 + d10) * W[f + 10]
+            e11 = (e11 + d11) * W[f + 11]
+            e12 = (e12 + d12) * W[f + 12]
+            e13 = (e13 + d13) * W[f + 13]
+            e14 = (e14 + d14) * W[f + 14]
+            e15 = (e15 + d15) * W[f + 15]
+            W[c + 0] = e0
+            W[c + 1] = e1
+            W[c + 2] = e2
+            W[c + 3] = e3
+            W[c + 4] = e4
+            W[c + 5] = e5
+            W[c + 6] = e6
+            W[c + 7] = e7
+            W[c + 8] = e8
+            W[c + 9] = e9
+            W[c + 10] = e10
+            W[c + 11] = e11
+            W[c + 12] = e12
+            W[c + 13] = e13
+            W[c + 14] = e14
+            W[c + 15] = e15
+            G[g + 0] = e0
+            G[g + 1] = e1
+            G[g + 2] = e2
+            G[g + 3] = e3
+            G[g + 4] = e4
+            G[g + 5] = e5
+            G[g + 6] = e6
+            G[g + 7] = e7
+            G[g + 8] = e8
+            G[g + 9] = e9
+            G[g + 10] = e10
+            G[g + 11] = e11
+            G[g + 12] = e12
+            G[g + 13] = e13
+            G[g + 14] = e14
+            G[g + 15] = e15
+        # the balls' terms from the forces, which G holds in one row: no branch
         s = SERIES_SCALE[k]
-        if unit:
-            for p in range(m):
-                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-                TX[k + 2, p] = (fl - fr) * s
+        if nc == 0:  # (a lone ball: no force)
+            TX[k + 2, 0] = 0.0
+        elif unit:
+            TX[k + 2, 0] = (0.0 - G[0]) * s
+            for p in range(1, nc):
+                TX[k + 2, p] = (G[p - 1] - G[p]) * s
+            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
         else:
-            for p in range(m):
-                fl = W[_tw(p - 1, f0 + k)] if p > 0 else 0.0
-                fr = W[_tw(p, f0 + k)] if p < nc else 0.0
-                TX[k + 2, p] = (fl - fr) * s * IM[p]
+            TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
+            for p in range(1, nc):
+                TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
+            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]

@@ -175,7 +175,8 @@ State = namedtuple(
         "cst", "lvl", "stamp", "cp",
         # clusters: ball range, offset in the compact arrays, energy since the last change
         "clo", "chi", "coff", "cen",
-        # compact (integrated) balls: state, step start, dense-stage positions (XS),
+        # compact (integrated) balls: state, step start, dense-stage positions (XS; a
+        # series step's scratch row of one order's forces, lanes long),
         # contact forces (FS), stage accelerations (KV), interpolant rows (FX, FV) and
         # the stamp of the step they were built for (DM, see _dense_at), the balls'
         # and lanes' parameters (WP, rows W_*; TR holds each lane's stiffness); the Taylor

@@ -91,19 +91,33 @@ def _taylor(S):
         fr = W[_tw(p, f0)] if p < nc else 0.0
         TX[2, p] = 0.5 * (fl - fr) if unit else 0.5 * ((fl - fr) * IM[p] + GA[p])
     if mode == MODE_LINEAR:
+        # each order's forces go to a row of their own (XS, scratch between steps, as
+        # in _series_orders), so that the pass over the balls reads neighbours in one
+        # row, with no branch
+        G = S.XS
         for k in range(1, PT + 1):
             for p in range(nc):
-                W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]
+                c = TX[k, p] - TX[k, p + 1]
+                W[_tw(p, k)] = c
+                G[p] = c * MK[p]
             if k < PT - 1:
                 s = 1.0 / ((k + 1) * (k + 2))
-                for p in range(m):
-                    fl = W[_tw(p - 1, k)] * MK[p - 1] if p > 0 else 0.0
-                    fr = W[_tw(p, k)] * MK[p] if p < nc else 0.0
-                    TX[k + 2, p] = (fl - fr) * s if unit else (fl - fr) * s * IM[p]
+                if nc == 0:  # (a lone ball: no force)
+                    TX[k + 2, 0] = 0.0
+                elif unit:
+                    TX[k + 2, 0] = (0.0 - G[0]) * s
+                    for p in range(1, nc):
+                        TX[k + 2, p] = (G[p - 1] - G[p]) * s
+                    TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
+                else:
+                    TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
+                    for p in range(1, nc):
+                        TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
+                    TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
     elif mode == MODE_MIXED:
-        _series_orders_mixed(TX, W, IM, AL, nc, m, unit)
+        _series_orders_mixed(TX, W, S.XS, IM, AL, nc, m, unit)
     else:
-        _series_orders(TX, W, IM, nc, m, alpha, unit)
+        _series_orders(TX, W, S.XS, IM, nc, m, alpha, unit)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
