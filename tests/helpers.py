@@ -1,4 +1,5 @@
-"""What several test files share: running the real ``chainrun simulate`` on a config."""
+"""What several test files share: running the real ``chainrun simulate`` on a config,
+the paper's Table 1 as printed, and building the paper's cheap artefacts."""
 
 from __future__ import annotations
 
@@ -7,6 +8,21 @@ from pathlib import Path
 from click.testing import CliRunner
 
 from chainrun.cli import main
+
+#: The repository (tests/ is one level below it).
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Table 1 of the paper as printed: final velocities of the N = 5 Hertz line, by K.
+TABLE1 = {
+    1: ["-0.0711", "-0.0303", "-0.0145", "0.1270", "0.9888"],
+    2: ["-0.1126", "-0.0420", "0.2145", "0.8004", "1.140"],
+    3: ["-0.1397", "0.1996", "0.7855", "1.042", "1.113"],
+    4: ["0.0112", "0.8729", "1.015", "1.030", "1.071"],
+}
+
+#: The paper's artefacts cheap enough to build in the test suite (no dense snapshots).
+FAST = ("fig01", "fig02", "fig03", "fig04", "fig05", "fig06", "fig07", "sec4", "fig08",
+        "fig09", "fig12", "fig13", "table1")
 
 
 def simulate_text(folder: Path, text: str, name: str = "experiment") -> Path:
@@ -18,3 +34,24 @@ def simulate_text(folder: Path, text: str, name: str = "experiment") -> Path:
     result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)])
     assert result.exit_code == 0, result.output
     return out
+
+
+def build(name: str, results: Path):
+    """Simulate the experiments of artefact ``name`` (and of those it needs) into
+    ``results`` and analyze it; return its ``AnalysisData``."""
+    from chainrun import artefacts
+    from chainrun.analysis import analyze
+    from chainrun.config import load_experiment
+    from chainrun.runner import simulate_experiment
+    from chainrun.store import read_analysis
+
+    artefact = artefacts.get(name)
+    for need in artefact.needs:
+        if not artefacts.analysis_path(need, results).exists():
+            build(need, results)
+    for experiment in artefact.experiments:
+        index = artefacts.index_path(experiment, results)
+        if not index.exists():
+            spec = load_experiment(ROOT / "configs" / f"{experiment}.toml")
+            simulate_experiment(spec, index.parent, jobs=1)
+    return read_analysis(analyze(name, results=results))

@@ -16,15 +16,9 @@ import chainrun.runner as runner
 from chainrun.cli import main
 from chainrun.store import read_index
 
-CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+from helpers import TABLE1
 
-#: Table 1 of the paper: final velocities of five Hertz spheres, K = 1..4 (columns).
-TABLE1 = {
-    1: ["-0.0711", "-0.0303", "-0.0145", "0.1270", "0.9888"],
-    2: ["-0.1126", "-0.0420", "0.2145", "0.8004", "1.140"],
-    3: ["-0.1397", "0.1996", "0.7855", "1.042", "1.113"],
-    4: ["0.0112", "0.8729", "1.015", "1.030", "1.071"],
-}
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 
 @pytest.fixture

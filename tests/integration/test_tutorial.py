@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_cli import TABLE1
+from helpers import TABLE1
 
 TUTORIAL = Path(__file__).resolve().parents[2] / "docs" / "tutorial.py"
 

@@ -16,7 +16,8 @@ The heavy artefacts (dense snapshots: sec5a, sec5b, fig10, fig11, sec5c) run onl
 
 Regenerate the reference after a deliberate change with::
 
-    make figures && .venv/bin/python tests/regression/test_analysis.py --update results
+    make figures
+    PYTHONPATH=tests .venv/bin/python tests/regression/test_analysis.py --update results
 """
 
 from __future__ import annotations
@@ -31,16 +32,11 @@ import pytest
 from chainrun import artefacts
 from chainrun.analysis import analyze, derived, nesterenko
 from chainrun.analysis.paper import PRINTED, agrees, parse, render_note, tolerance
-from chainrun.config import load_experiment
-from chainrun.runner import simulate_experiment
 from chainrun.store import AnalysisData, read_analysis, read_run, write_analysis
 
-ROOT = Path(__file__).resolve().parents[2]
-REFERENCE = ROOT / "tests" / "data" / "analysis_reference.json"
+from helpers import FAST, ROOT
 
-#: Artefacts cheap enough to build in the test suite (no dense snapshots).
-FAST = ("fig01", "fig02", "fig03", "fig04", "fig05", "fig06", "fig07", "sec4", "fig08",
-        "fig09", "fig12", "fig13", "table1")
+REFERENCE = ROOT / "tests" / "data" / "analysis_reference.json"
 
 #: Printed numbers that differ from chainrun's at the printed precision; each carries an
 #: explanation in chainrun/analysis/paper.py (checked below).
@@ -54,36 +50,6 @@ KNOWN_DISAGREEMENTS = {
 
 #: One table of tolerances for chainrun's own values against the stored reference.
 TOL = {"rel": 1e-6, "abs": 1e-10}
-
-
-# ----------------------------------------------------------------- building artefacts
-def build(name: str, results: Path) -> AnalysisData:
-    """Simulate the experiments of ``name`` (and of what it needs) and analyze it."""
-    artefact = artefacts.get(name)
-    for need in artefact.needs:
-        if not artefacts.analysis_path(need, results).exists():
-            build(need, results)
-    for experiment in artefact.experiments:
-        index = artefacts.index_path(experiment, results)
-        if not index.exists():
-            spec = load_experiment(ROOT / "configs" / f"{experiment}.toml")
-            simulate_experiment(spec, index.parent, jobs=1)
-    return read_analysis(analyze(name, results=results))
-
-
-@pytest.fixture(scope="session")
-def built(tmp_path_factory):
-    """``built(name)``: the analysis of a fast artefact, built once per test process."""
-    results = tmp_path_factory.mktemp("results")
-    cache: dict[str, AnalysisData] = {}
-
-    def get(name: str) -> AnalysisData:
-        if name not in cache:
-            cache[name] = build(name, results)
-        return cache[name]
-
-    get.results = results
-    return get
 
 
 @pytest.fixture(scope="module")
@@ -318,6 +284,7 @@ def update_reference(results: Path) -> None:
 
 if __name__ == "__main__":
     if len(sys.argv) != 3 or sys.argv[1] != "--update":
-        sys.exit("usage: python tests/regression/test_analysis.py --update RESULTS")
+        sys.exit("usage: PYTHONPATH=tests python tests/regression/test_analysis.py --update "
+                 "RESULTS")
     update_reference(Path(sys.argv[2]))
     print(f"wrote {REFERENCE}")

@@ -22,7 +22,7 @@ from chainrun.analysis import recipe
 from chainrun.cli import main
 from chainrun.config import load_experiment
 
-from test_analysis import FAST, ROOT, built  # noqa: F401  (built: a shared fixture)
+from helpers import FAST, ROOT
 
 FIGURES = [a.name for a in artefacts.ARTEFACTS if a.kind == "figure"]
 FAST_FIGURES = [name for name in FIGURES if name in FAST]
