@@ -86,6 +86,25 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
 
 
 @kernel(inline="always")
+def _series_terms(TX, r, G, IM, nc, s, unit):
+    """Row r of the balls' series from their contact lanes' force terms G[0:nc] (one
+    order), times s: (G[p-1] - G[p]) s / m_p, the ends peeled so that the pass has no
+    branch (``unit``: every mass 1). The series' counterpart of _accelerations."""
+    if nc == 0:  # (a lone ball: no force)
+        TX[r, 0] = 0.0
+    elif unit:
+        TX[r, 0] = (0.0 - G[0]) * s
+        for p in range(1, nc):
+            TX[r, p] = (G[p - 1] - G[p]) * s
+        TX[r, nc] = (G[nc - 1] - 0.0) * s
+    else:
+        TX[r, 0] = (0.0 - G[0]) * s * IM[0]
+        for p in range(1, nc):
+            TX[r, p] = (G[p - 1] - G[p]) * s * IM[p]
+        TX[r, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
+
+
+@kernel(inline="always")
 def _damping(c, w, beta):
     """|c|^beta w: the damping force of unit damping (the named laws' beta = 0, 1/2 and,
     for Hertz, Tsuji's 1/4 without a pow)."""

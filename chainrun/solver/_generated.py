@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from chainrun.solver._forces import (
-    _accelerations, _damped_accelerations, _damped_forces, _forces,
+    _accelerations, _damped_accelerations, _damped_forces, _forces, _series_terms,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
@@ -450,20 +450,8 @@ def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
             G[g + 13] = e13
             G[g + 14] = e14
             G[g + 15] = e15
-        # the balls' terms from the forces, which G holds in one row: no branch
-        s = SERIES_SCALE[k]
-        if nc == 0:  # (a lone ball: no force)
-            TX[k + 2, 0] = 0.0
-        elif unit:
-            TX[k + 2, 0] = (0.0 - G[0]) * s
-            for p in range(1, nc):
-                TX[k + 2, p] = (G[p - 1] - G[p]) * s
-            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
-        else:
-            TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
-            for p in range(1, nc):
-                TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
-            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
+        # the balls' terms from the forces, which G holds in one row
+        _series_terms(TX, k + 2, G, IM, nc, SERIES_SCALE[k], unit)
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
@@ -637,20 +625,8 @@ def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
             G[g + 13] = e13
             G[g + 14] = e14
             G[g + 15] = e15
-        # the balls' terms from the forces, which G holds in one row: no branch
-        s = SERIES_SCALE[k]
-        if nc == 0:  # (a lone ball: no force)
-            TX[k + 2, 0] = 0.0
-        elif unit:
-            TX[k + 2, 0] = (0.0 - G[0]) * s
-            for p in range(1, nc):
-                TX[k + 2, p] = (G[p - 1] - G[p]) * s
-            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
-        else:
-            TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
-            for p in range(1, nc):
-                TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
-            TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
+        # the balls' terms from the forces, which G holds in one row
+        _series_terms(TX, k + 2, G, IM, nc, SERIES_SCALE[k], unit)
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]

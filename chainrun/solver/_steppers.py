@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from chainrun.solver._forces import _force, _rhs
+from chainrun.solver._forces import _force, _rhs, _series_terms
 from chainrun.solver._generated import (
     _dense_ball, _dense_rows, _dense_stages, _error_norm, _series_orders,
     _series_orders_mixed, _stages,
@@ -101,19 +101,7 @@ def _taylor(S):
                 W[_tw(p, k)] = c
                 G[p] = c * MK[p]
             if k < PT - 1:
-                s = 1.0 / ((k + 1) * (k + 2))
-                if nc == 0:  # (a lone ball: no force)
-                    TX[k + 2, 0] = 0.0
-                elif unit:
-                    TX[k + 2, 0] = (0.0 - G[0]) * s
-                    for p in range(1, nc):
-                        TX[k + 2, p] = (G[p - 1] - G[p]) * s
-                    TX[k + 2, nc] = (G[nc - 1] - 0.0) * s
-                else:
-                    TX[k + 2, 0] = (0.0 - G[0]) * s * IM[0]
-                    for p in range(1, nc):
-                        TX[k + 2, p] = (G[p - 1] - G[p]) * s * IM[p]
-                    TX[k + 2, nc] = (G[nc - 1] - 0.0) * s * IM[nc]
+                _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)
     elif mode == MODE_MIXED:
         _series_orders_mixed(TX, W, S.XS, IM, AL, nc, m, unit)
     else:
