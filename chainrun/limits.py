@@ -40,11 +40,12 @@ __all__ = [
 
 #: Bytes per ball of the solver's state (``_driver._new_state``): float64 ``bx, bv, bt,
 #: sep_t, sep_v, ox, ov`` and int64 ``bmap, jbuf`` (9 x 8), the heap ``hp_t, hp_j,
-#: hp_s`` (2N each: 6 x 8), ``freed`` (2N int64: 16), one contact per ball (``cst`` int8, ``lvl`` float64, ``stamp`` int64:
-#: 17), N/2 clusters (``clo, chi, coff`` int64 and ``cen`` float64: 16), and the balls'
-#: and contacts' parameters (``bp``: 3 x 8, ``cp``: 5 x 8; 9 x 8 on a damped line, whose
-#: 32 more bytes per ball the estimate leaves to its margin).
-STATE_BYTES_PER_BALL = 9 * 8 + 6 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8
+#: hp_s`` (3N each: 9 x 8), ``freed`` (2N int64: 16), one contact per ball (``cst``
+#: int8, ``lvl`` float64, ``stamp`` int64: 17), N/2 clusters (``clo, chi, coff`` int64
+#: and ``cen`` float64: 16), and the balls' and contacts' parameters (``bp``: 3 x 8,
+#: ``cp``: 5 x 8; 9 x 8 on a damped line, whose 32 more bytes per ball the estimate
+#: leaves to its margin) with the sealed collisions' closed forms (``sl``: 6 x 8).
+STATE_BYTES_PER_BALL = 9 * 8 + 9 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8 + 6 * 8
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages and 2 rows of a damped
 #: line's x 8), ``FX, FV`` (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work

@@ -56,6 +56,7 @@ class RunSummary:
     steps: int
     rejected_steps: int
     max_window: int
+    closed_form: int  # collisions taken whole, in closed form (0 in older files)
     wall_time: float
     momentum_error: float
     energy_error: float
@@ -152,6 +153,7 @@ def summarize(run) -> RunSummary:
         steps=int(d["steps"]),
         rejected_steps=int(d["rejected_steps"]),
         max_window=int(d["max_window"]),
+        closed_form=int(d.get("closed_form_collisions", 0)),
         wall_time=float(d["wall_time"]),
         momentum_error=float(d["momentum_error"]),
         energy_error=float(d["energy_error"]),

@@ -5,7 +5,9 @@ contact that becomes active joins the clusters or balls on its two sides
 (``_activate``); one that becomes inactive splits its cluster and frees the balls
 left alone (``_deactivate``). After any change ``_rebuild`` packs the clusters' balls
 into the compact arrays that the steppers integrate, and schedules the freed balls'
-collisions with their free neighbours (``_heap``).
+collisions with their free neighbours (``_heap``). A sealed collision (``_pairs``)
+that a cluster or a freed ball could reach is taken into the integration
+(``_unseal``).
 """
 
 from __future__ import annotations
@@ -13,10 +15,12 @@ from __future__ import annotations
 from chainrun.solver._forces import _rhs
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
+from chainrun.solver._pairs import _sealed_at, _sealed_contact
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
     B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED, I_DENSE,
     I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL, I_RWL, OPEN,
+    ACTIVE,
     W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
@@ -136,8 +140,47 @@ def _deactivate(S, j, level):
 
 
 @kernel
+def _unseal(S, j):
+    """Integrate sealed contact j from now: its balls take their exact state at this
+    instant, and the contact becomes an active one of a new cluster (it was logged
+    closed when sealed)."""
+    t = S.fs[F_T]
+    xl, vl = _sealed_at(S, j, j, t)
+    xr, vr = _sealed_at(S, j, j + 1, t)
+    S.bx[j] = xl
+    S.bv[j] = vl
+    S.bt[j] = t
+    S.bx[j + 1] = xr
+    S.bv[j + 1] = vr
+    S.bt[j + 1] = t
+    S.cst[j] = OPEN
+    return _activate(S, j, ACTIVE)
+
+
+@kernel
+def _unseal_near_clusters(S):
+    """Integrate the sealed contacts next to a cluster: the cluster's edge ball is
+    not in free flight, and only a free neighbour can be kept clear of a pair."""
+    again = True
+    while again:
+        again = False
+        for c in range(S.ints[I_NCL]):
+            for b in (S.clo[c] - 1, S.chi[c] + 1):
+                if b < 0 or b >= S.bx.shape[0]:
+                    continue
+                js = _sealed_contact(S, b)
+                if js >= 0:
+                    _unseal(S, js)
+                    again = True
+                    break
+            if again:
+                break
+
+
+@kernel
 def _rebuild(S):
     """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
+    _unseal_near_clusters(S)
     ncl = S.ints[I_NCL]
     m = 0
     for c in range(ncl):
@@ -191,9 +234,12 @@ def _rebuild(S):
     S.ints[I_DENSE] = 0
     S.ints[I_DSTAMP] += 1
     # balls that just lost their last contact may be on course to hit a free neighbour
+    # (or to reach a sealed pair, which then joins the integration: packed again)
     for i in range(S.ints[I_NFREED]):
         b = S.freed[i]
-        _schedule_pair(S, b - 1)
-        _schedule_pair(S, b)
+        for j in (b - 1, b):
+            js = _schedule_pair(S, j)
+            if js >= 0:
+                _unseal(S, js)
     S.ints[I_NFREED] = 0
     return 0

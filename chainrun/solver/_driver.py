@@ -247,7 +247,7 @@ def _new_state(n, k, alpha, rtol, t_end, max_events) -> _state.State:
     return _line_state(_Prepared(Line.paper(n, k, alpha)), rtol, t_end, max_events)
 
 
-def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
+def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _state.State:
     nb = P.nb
     ncont = max(nb - 1, 1)
     floor = velocity_floor(rtol)
@@ -298,6 +298,8 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
     ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_FORCED] = 1 if P.forced else 0
     ints[_state.I_DAMPED] = 1 if P.damped else 0
+    # isolated collisions in closed form: elastic, and free flight in straight lines
+    ints[_state.I_PAIRS] = 1 if closed_form and not P.damped and not P.forced else 0
     ints[_state.I_LWALL] = P.lw
     ints[_state.I_RWALL] = P.rw
     ints[_state.I_LWL] = ints[_state.I_RWL] = -1
@@ -307,12 +309,13 @@ def _line_state(P: _Prepared, rtol, t_end, max_events) -> _state.State:
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),
         sep_t=np.full(nb, np.nan), sep_v=np.full(nb, np.nan),
         bmap=np.full(nb, -1, np.int64), bp=bp,
-        cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp,
+        cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp, sl=np.zeros((6, ncont)),
         clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
         **_alloc_window(min(nb, _INITIAL_WINDOW)),
-        # every contact can be predicted twice (from the freed balls on either side)
-        hp_t=np.zeros(2 * nb), hp_j=np.zeros(2 * nb, np.int64),
-        hp_s=np.zeros(2 * nb, np.int64),
+        # every contact can be predicted twice (from the freed balls on either side),
+        # and every other one can be a sealed collision's end
+        hp_t=np.zeros(3 * nb), hp_j=np.zeros(3 * nb, np.int64),
+        hp_s=np.zeros(3 * nb, np.int64),
         ev_t=np.zeros(_EVENT_BUFFER), ev_j=np.zeros(_EVENT_BUFFER, np.int64),
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
         ox=np.zeros(nb), ov=np.zeros(nb), probe=np.zeros(0, np.int64),
@@ -391,7 +394,8 @@ def run(n, k, alpha, times=(), **kw) -> Solution:
 
 
 def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
-             on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None) -> Solution:
+             on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None,
+             closed_form=True) -> Solution:
     """See ``chainrun.solver.simulate_line``: the run in the units of the line's scales,
     its inputs and results converted at the edges."""
     if not isinstance(line, Line):
@@ -404,7 +408,8 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     P = _Prepared(line)
     sc = P.scales
     tscale = sc.time
-    S = _line_state(P, rtol, None if t_end is None else t_end / tscale, max_events)
+    S = _line_state(P, rtol, None if t_end is None else t_end / tscale, max_events,
+                    closed_form)
     load_kernels(S)
     wall0 = time.perf_counter()
     n = line.n
@@ -586,6 +591,7 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
         max_window=int(S.ints[_state.I_MAXWIN]),
         rtol=float(rtol),
         velocity_floor=velocity_floor(rtol),
+        closed_form_collisions=int(S.ints[_state.I_NSEAL]),
     )
 
 

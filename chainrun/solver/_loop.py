@@ -11,14 +11,20 @@ One pass of the loop rebuilds the compact arrays after a change of structure
 (``_clusters``), takes snapshots due inside the last step, applies the event or
 releases that the last step ended on (``_post_step``, ``_settle``), jumps over free
 flight to the next predicted collision (``_heap``), or takes one accepted step
-(``_steppers``) that ends on the earliest event found in it (``_events``).
+(``_steppers``) that ends on the earliest event found in it (``_events``). A predicted
+collision that nothing else can reach while it lasts is taken whole, in closed form,
+and its end waits in the heap (``_binary``, ``_pairs``): it costs no steps and does
+not hold back the clusters' step size.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from chainrun.solver._clusters import _activate, _deactivate, _rebuild, _sync
+from chainrun.solver._binary import _part, _seal
+from chainrun.solver._clusters import (
+    _activate, _deactivate, _rebuild, _sync, _unseal_near_clusters,
+)
 from chainrun.solver._compression import _pressed_in_step
 from chainrun.solver._events import (
     _contact_at, _contact_load, _find_event, _load_rate, _log, _rounding,
@@ -26,13 +32,14 @@ from chainrun.solver._events import (
 from chainrun.solver._forces import _damping
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
+from chainrun.solver._pairs import _sealed_at, _sealed_contact
 from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
     C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
     FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
     F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
-    I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_POST, I_REJ, I_STEPS,
-    I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
+    I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS, I_POST,
+    I_REJ, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
     ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
     TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
@@ -80,6 +87,9 @@ def _state_at(S, b, tout, th):
             return _taylor_at(S, p, th * S.fs[F_HLAST])
         _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
+    js = _sealed_contact(S, b)
+    if js >= 0:
+        return _sealed_at(S, js, b, tout)
     return _free_at(S, b, tout)
 
 
@@ -349,6 +359,9 @@ def _settle(S):
         budget -= 1
         if budget < 0:
             return False  # contacts flipping back and forth: a defect, reported by the driver
+        # a sealed collision next to a cluster is integrated from now on: its balls'
+        # free-flight lines are not their motion
+        _unseal_near_clusters(S)
         for c in range(S.ints[I_NCL]):
             j0 = max(S.clo[c] - 1, 0)
             j1 = min(S.chi[c], ncont - 1)
@@ -446,7 +459,7 @@ def advance(S):
         return ST_OUTPUT
     nsteps = 0
     while True:
-        if S.ints[I_DIRTY] == 1:
+        while S.ints[I_DIRTY] == 1:  # (a rebuild can take a sealed pair in: again)
             need = _rebuild(S)
             if need > 0:
                 S.ints[I_NEED] = need
@@ -473,6 +486,8 @@ def advance(S):
         tcol = np.inf
         if _heap_valid_top(S):
             tcol = S.hp_t[0]
+            if tcol <= t and S.ev_t.shape[0] - S.ints[I_NEV] < 2:
+                return ST_FLUSH
             if tcol <= t:
                 # collisions at one instant: each contact closes there at most a few
                 # times; more means states flipping back and forth, a defect that is
@@ -487,6 +502,17 @@ def advance(S):
                     S.ints[I_NSAME] = 0
                 j = S.hp_j[0]
                 _heap_pop(S)
+                nc = S.cst.shape[0]
+                if j >= nc or (S.ints[I_PAIRS] == 1 and _seal(S, j)):
+                    # a sealed collision ends, or one begins (see _binary)
+                    if j >= nc:
+                        _part(S, j - nc)
+                    else:
+                        S.ints[I_NSEAL] += 1
+                    nsteps += 1
+                    if nsteps > YIELD_STEPS:
+                        return ST_YIELD
+                    continue
                 S.ints[I_EVJ] = j
                 S.ints[I_EVK] = EV_CLOSE
                 S.ints[I_POST] = 1

@@ -23,6 +23,8 @@ Contact states (``cst``)::
     ACTIVE   active ("seasoned"); opens exactly where the compression crosses 0
     OPEN     inactive; closes where the gap reaches 0 with approach speed >= floor,
              or engages where the compression exceeds ``lvl[j]`` (a slow press)
+    SEALED   an isolated binary collision in progress, in closed form (``_pairs``):
+             its two balls are in no cluster, and their motion is known exactly
 """
 
 from __future__ import annotations
@@ -78,6 +80,7 @@ DORMANT = 3
 FRESH = 1
 ACTIVE = 2
 OPEN = 0
+SEALED = 4
 
 # ---- event kinds (same values as chainrun.solver.EventKind) ---------------------------
 EV_RELEASE = -2
@@ -125,11 +128,15 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_TASK, I_XEND, I_NINT = range(32)
+    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_NINT = range(34)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
+
+# I_PAIRS: 1 when an isolated binary collision may be taken in closed form (_pairs;
+# an elastic line without external forces, unless the caller asked otherwise);
+# I_NSEAL: how many were
 
 # I_XEND: 1 when (X, V, A) hold the window at the end of the last step (or trial step);
 # 0 while a series step is tried before the window is evaluated (see _loop.advance):
@@ -160,6 +167,10 @@ C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC, C_ETA, C_BETA, C_HELD, C_DISS = range(9)
 # per compact ball, WP: inverse mass, external acceleration, mass, and the exponent,
 # damping, damping exponent and C_HELD of the contact lane it starts
 W_IM, W_ACC, W_MASS, W_ALPHA, W_ETA, W_BETA, W_HELD = range(7)
+# per contact, sl: a sealed collision's closed form (see _pairs): the time its
+# compression was 0 going in, its duration, the centre of mass's position then and its
+# velocity, the approach speed, and the greatest compression
+SL_T0, SL_TAU, SL_X, SL_V, SL_W, SL_CMAX = range(6)
 # extra rows of KV on a damped line: the stage velocities, and each lane's energy
 # dissipated over the step being taken (see _forces._damped_forces)
 KV_VS = _NSE
@@ -172,7 +183,7 @@ State = namedtuple(
         # parameters (bp, rows B_*)
         "bx", "bv", "bt", "sep_t", "sep_v", "bmap", "bp",
         # contacts, shape (N-1,) (at least 1); their parameters (cp, rows C_*)
-        "cst", "lvl", "stamp", "cp",
+        "cst", "lvl", "stamp", "cp", "sl",
         # clusters: ball range, offset in the compact arrays, energy since the last change
         "clo", "chi", "coff", "cen",
         # compact (integrated) balls: state, step start, dense-stage positions (XS; a
@@ -185,7 +196,8 @@ State = namedtuple(
         # and of one contact's compression (TD, shape (PT + 1,)) with its samples (TS)
         "cb", "X", "V", "A", "X0", "V0", "A0", "XS", "FS", "KV", "FX", "FV", "DM", "WP",
         "TX", "TW", "TR", "TD", "TS",
-        # heap of free-pair collisions
+        # heap of free-pair collisions and of the ends of sealed ones (hp_j >= N - 1:
+        # contact hp_j - (N - 1) parts)
         "hp_t", "hp_j", "hp_s",
         # event log buffer
         "ev_t", "ev_j", "ev_k",

@@ -1,0 +1,123 @@
+"""Isolated binary collisions taken whole, in closed form (``chainrun.solver._pairs``).
+
+A collision of two free balls that no third body can reach while it lasts is applied
+exactly: its outcome, its duration and its interior come from the pair's own motion.
+The references are the closed forms of ``closed_forms.py`` (outcome, duration, a linear
+pair's whole trajectory) and the independent ``reference.reference_line``, for lines
+where a third ball arrives during a sealed contact, which is then integrated from that
+instant.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from chainrun.solver import EventKind, simulate_line
+from chainrun.solver.model import Line, Wall
+from closed_forms import contact_duration, linear_pair, two_ball_velocities
+from reference import reference_line
+
+#: an exact outcome is exact to rounding; a comparison with the reference solver (whose
+#: own accuracy is 3e-12 in velocity) is asked for what test_general_model asks
+TOL = {"exact": 1e-13, "reference": 1e-8}
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0, 2.5])
+@pytest.mark.parametrize(("m1", "m2", "k", "u"), [(1.0, 1.0, 1.0, 1.0), (3.0, 1.0, 2.3, 0.7),
+                                                  (1.0, 10.0, 0.5, 2.0)])
+def test_a_meeting_after_a_gap_is_exact(m1, m2, k, u, alpha):
+    g = 0.3
+    line = Line.make(2, mass=[m1, m2], stiffness=k, alpha=alpha, speed=u, gap=g)
+    sol = simulate_line(line)
+    assert sol.diagnostics.closed_form_collisions == 1
+    assert sol.diagnostics.steps == 0
+    np.testing.assert_allclose(sol.final_velocity, two_ball_velocities(m1, m2, u),
+                               rtol=0, atol=TOL["exact"] * u)
+    tc = contact_duration(m1 * m2 / (m1 + m2), k, alpha, u)
+    assert list(sol.event_kind) == [EventKind.CLOSE, EventKind.OPEN]
+    np.testing.assert_allclose(sol.event_time, [g / u, g / u + tc], rtol=TOL["exact"])
+    # the integrated collision agrees to the integration's accuracy
+    slow = simulate_line(line, closed_form=False)
+    assert slow.diagnostics.closed_form_collisions == 0 and slow.diagnostics.steps > 0
+    np.testing.assert_allclose(slow.final_velocity, sol.final_velocity, rtol=0,
+                               atol=1e-10 * u)
+
+
+def test_the_interior_of_a_sealed_linear_contact():
+    m1, m2, k, u, g = 2.0, 0.5, 3.0, 0.8, 0.4
+    tc = contact_duration(m1 * m2 / (m1 + m2), k, 1.0, u)
+    inside = np.array([0.0, 1e-9, 0.3, 0.5, 0.77, 0.999999, 1.0]) * tc
+    times = np.concatenate([[0.0, 0.1], g / u + inside, [g / u + 1.3 * tc, 9.0]])
+    sol = simulate_line(Line.make(2, mass=[m1, m2], stiffness=k, alpha=1.0, speed=u, gap=g),
+                        times)
+    assert sol.diagnostics.closed_form_collisions == 1
+    # the pair of closed_forms touches at t = 0 at x = 0: shift by the free flight
+    x, v = linear_pair(np.maximum(times - g / u, 0.0), m1, m2, k, u)
+    before = times < g / u
+    x[before] = np.outer(times[before] - g / u, [u, 0.0])
+    v[before] = [u, 0.0]
+    x[:, 0] += g  # (positions are displacements: the gap closes as ball 1 moves g)
+    np.testing.assert_allclose(sol.positions, x, rtol=0, atol=TOL["exact"])
+    np.testing.assert_allclose(sol.velocities, v, rtol=0, atol=TOL["exact"])
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_a_wall_bounce_is_exact(side, alpha):
+    m, k, u, g = 1.7, 0.6, 0.9, 0.25
+    sign = 1.0 if side == "right" else -1.0
+    sol = simulate_line(Line.make(1, mass=m, velocity=[sign * u],
+                                  **{side: Wall(k, alpha, g)}))
+    assert sol.diagnostics.closed_form_collisions == 1
+    assert sol.final_velocity[0] == pytest.approx(-sign * u, abs=TOL["exact"] * u)
+    np.testing.assert_allclose(sol.event_time, [g / u, g / u + contact_duration(m, k, alpha, u)],
+                               rtol=TOL["exact"])
+    # the wall's impulse is the momentum it gave: 2 m u, towards the line
+    left, right = sol.wall_impulse
+    assert (left if side == "left" else right) == pytest.approx(-sign * 2 * m * u, rel=1e-14)
+    assert sol.diagnostics.momentum_error < 1e-14
+
+
+def third_ball_line(alpha):
+    """Balls 2 and 3 meet at t = 0.01 (a sealed contact: ball 1 is at rest far behind);
+    ball 0, fast, strikes ball 1 at t = 0.1, and ball 1 reaches the pair while it is
+    still in contact: the contact is integrated from the strike on."""
+    return Line.make(4, alpha=alpha, velocity=[10.0, 0.0, 1.0, 0.0], gap=[1.0, 0.6, 0.01],
+                     mass=[1.0, 1.3, 0.8, 1.1])
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0])
+def test_a_third_ball_reaching_a_sealed_contact(alpha):
+    line = third_ball_line(alpha)
+    sol = simulate_line(line)
+    ref = reference_line(line)
+    assert sol.diagnostics.closed_form_collisions >= 1
+    np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
+                               atol=TOL["reference"])
+    # the pair 2-3 was still pressed when ball 1 arrived: one close and one open for it
+    pair = sol.event_contact == 2
+    assert list(sol.event_kind[pair][:2]) == [EventKind.CLOSE, EventKind.OPEN]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_gas_of_balls_against_the_reference(seed):
+    # balls of random masses, far apart, moving at random: mostly binary collisions,
+    # some of them crowded by a third ball
+    rng = np.random.default_rng(seed)
+    n = 8
+    line = Line.make(n, mass=10.0 ** rng.uniform(-0.5, 0.5, n), alpha=rng.choice([1.0, 1.5]),
+                     stiffness=10.0 ** rng.uniform(-0.5, 0.5, n - 1),
+                     gap=rng.uniform(0.05, 1.0, n - 1), velocity=rng.uniform(-1.0, 1.0, n))
+    sol = simulate_line(line)
+    ref = reference_line(line)
+    assert sol.terminal and sol.diagnostics.closed_form_collisions > 0
+    np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
+                               atol=TOL["reference"])
+    # the same collisions at the same times (sorted: simultaneous ones in any order)
+    for kind in (EventKind.CLOSE, EventKind.OPEN):
+        got = np.sort(sol.event_time[sol.event_kind == kind])
+        want = np.sort(ref.event_time[ref.event_kind == int(kind)])
+        assert got.shape == want.shape
+        assert np.all(np.abs(got - want) <= TOL["reference"] * (1.0 + want))
+    assert sol.diagnostics.energy_error < 1e-12
