@@ -12,13 +12,13 @@ contact it could reach is integrated from that instant (``_clusters._unseal``).
 
 from __future__ import annotations
 
-from chainrun.solver._clusters import _touch_ball
+from chainrun.solver._clusters import _touch_ball, _unseal
 from chainrun.solver._events import _log, _rounding
 from chainrun.solver._heap import _heap_push, _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import _clear_of, _closed_form, _fractions, _sealed_contact
 from chainrun.solver._state import (
-    B_IM, C_EPS, EV_CLOSE, EV_OPEN, F_JL, F_JR, F_T, I_LWALL, I_RWALL, OPEN, SEALED, SL_T0,
+    B_IM, C_EPS, EV_CLOSE, EV_OPEN, F_JL, F_JR, F_T, I_LWALL, I_RWALL, I_SEALED, OPEN, SEALED, SL_T0,
     SL_TAU, SL_V, SL_W, SL_X,
 )
 
@@ -50,6 +50,7 @@ def _seal(S, j):
                               and _clear_of(S, j, j + 2, t, tend)):
         return False
     S.cst[j] = SEALED
+    S.ints[I_SEALED] += 1
     _touch_ball(S, j)
     _touch_ball(S, j + 1)
     _heap_push(S, tend, j + S.cst.shape[0])
@@ -82,9 +83,14 @@ def _part(S, j):
     if j + 1 == S.bx.shape[0] - 1 and S.ints[I_RWALL] == 1:
         S.fs[F_JR] += imp
     S.cst[j] = OPEN
+    S.ints[I_SEALED] -= 1
     S.lvl[j] = max(S.cp[C_EPS, j], 4.0 * _rounding(2.0 * abs(x)))
     _touch_ball(S, j)
     _touch_ball(S, j + 1)
     _log(S, t, j, EV_OPEN)
-    _schedule_pair(S, j - 1)
-    _schedule_pair(S, j + 1)
+    # (a neighbour is never in a sealed collision itself, see _seal; were it, one it
+    # could reach would be integrated from now)
+    for q in (j - 1, j + 1):
+        js = _schedule_pair(S, q)
+        if js >= 0:
+            _unseal(S, js)

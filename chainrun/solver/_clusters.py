@@ -18,10 +18,9 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import _sealed_at, _sealed_contact
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED, I_DENSE,
-    I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL, I_RWL, OPEN,
-    ACTIVE,
-    W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
+    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED,
+    I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL,
+    I_RWL, I_SEALED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -154,6 +153,7 @@ def _unseal(S, j):
     S.bv[j + 1] = vr
     S.bt[j + 1] = t
     S.cst[j] = OPEN
+    S.ints[I_SEALED] -= 1
     return _activate(S, j, ACTIVE)
 
 
@@ -161,7 +161,7 @@ def _unseal(S, j):
 def _unseal_near_clusters(S):
     """Integrate the sealed contacts next to a cluster: the cluster's edge ball is
     not in free flight, and only a free neighbour can be kept clear of a pair."""
-    again = True
+    again = S.ints[I_SEALED] > 0
     while again:
         again = False
         for c in range(S.ints[I_NCL]):
@@ -180,7 +180,8 @@ def _unseal_near_clusters(S):
 @kernel
 def _rebuild(S):
     """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
-    _unseal_near_clusters(S)
+    if S.ints[I_SEALED] > 0:
+        _unseal_near_clusters(S)
     ncl = S.ints[I_NCL]
     m = 0
     for c in range(ncl):

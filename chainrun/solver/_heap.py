@@ -15,7 +15,7 @@ import numpy as np
 from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import _clear_of, _sealed_contact
 from chainrun.solver._state import (
-    B_ACC, F_FLOOR, F_T, I_NHEAP, SEALED, SL_T0, SL_TAU, _find_cluster, _free_at,
+    B_ACC, F_FLOOR, F_T, I_NHEAP, I_SEALED, SEALED, SL_T0, SL_TAU, _find_cluster, _free_at,
 )
 
 
@@ -134,12 +134,13 @@ def _schedule_pair(S, j):
     if _find_cluster(S, j) >= 0 or _find_cluster(S, j + 1) >= 0:
         return -1
     t = S.fs[F_T]
-    for b, a in ((j, j + 1), (j + 1, j)):
-        js = _sealed_contact(S, b)
-        if js >= 0:
-            if _clear_of(S, js, a, t, S.sl[SL_T0, js] + S.sl[SL_TAU, js]):
-                return -1
-            return js
+    if S.ints[I_SEALED] > 0:
+        for b, a in ((j, j + 1), (j + 1, j)):
+            js = _sealed_contact(S, b)
+            if js >= 0:
+                if _clear_of(S, js, a, t, S.sl[SL_T0, js] + S.sl[SL_TAU, js]):
+                    return -1
+                return js
     floor = S.fs[F_FLOOR]
     ga = S.bp[B_ACC, j]
     gb = S.bp[B_ACC, j + 1]

@@ -39,8 +39,8 @@ from chainrun.solver._state import (
     FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
     F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
     I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS, I_POST,
-    I_REJ, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW,
-    ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
+    I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT,
+    ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
     TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import (
@@ -87,9 +87,10 @@ def _state_at(S, b, tout, th):
             return _taylor_at(S, p, th * S.fs[F_HLAST])
         _dense_at(S, p)
         return _poly(S.FX, S.X0[p], p, th), _poly(S.FV, S.V0[p], p, th)
-    js = _sealed_contact(S, b)
-    if js >= 0:
-        return _sealed_at(S, js, b, tout)
+    if S.ints[I_SEALED] > 0:
+        js = _sealed_contact(S, b)
+        if js >= 0:
+            return _sealed_at(S, js, b, tout)
     return _free_at(S, b, tout)
 
 
@@ -361,7 +362,8 @@ def _settle(S):
             return False  # contacts flipping back and forth: a defect, reported by the driver
         # a sealed collision next to a cluster is integrated from now on: its balls'
         # free-flight lines are not their motion
-        _unseal_near_clusters(S)
+        if S.ints[I_SEALED] > 0:
+            _unseal_near_clusters(S)
         for c in range(S.ints[I_NCL]):
             j0 = max(S.clo[c] - 1, 0)
             j1 = min(S.chi[c], ncont - 1)

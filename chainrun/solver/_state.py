@@ -128,7 +128,7 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_NINT = range(34)
+    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_NINT = range(35)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
@@ -136,7 +136,8 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 
 # I_PAIRS: 1 when an isolated binary collision may be taken in closed form (_pairs;
 # an elastic line without external forces, unless the caller asked otherwise);
-# I_NSEAL: how many were
+# I_NSEAL: how many were; I_SEALED: how many are sealed now (the checks for them are
+# skipped while there are none)
 
 # I_XEND: 1 when (X, V, A) hold the window at the end of the last step (or trial step);
 # 0 while a series step is tried before the window is evaluated (see _loop.advance):
