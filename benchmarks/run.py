@@ -448,6 +448,7 @@ def chainrun_point(n, k, alpha, *, t_end=None, timeout=None, short=SHORT) -> dic
         return {"n": n, "time": None, "error": str(exc)}
     d = sol.diagnostics
     return {"n": n, "time": best, "times": times, "steps": d.steps, "events": d.events,
+            "closed_form": d.closed_form_collisions,
             "end_time": sol.end_time, "outcome": sol.outcome.value,
             "max_window": d.max_window, "energy_error": d.energy_error,
             "momentum_error": d.momentum_error, "final_velocity": sol.final_velocity}
@@ -732,7 +733,8 @@ def section_k80(mode: Mode, procs: Processes) -> dict:
                              timeout=mode.k80_timeout * 3 + 60, read_velocity=False)
             p.update(process_time=proc.wall, process_error=proc.error)
         log(f"  {fmt_t(p['time'])} s in-process, {fmt_t(p.get('process_time'))} s process, "
-            f"terminal t = {p['end_time']:.6g}, {p['events']} events, {p['steps']} steps")
+            f"terminal t = {p['end_time']:.6g}, {p['events']} events, {p['steps']} steps, "
+            f"{p['closed_form']} collisions in closed form")
     else:
         log(f"  {p.get('error')}")
     return p
@@ -1224,7 +1226,8 @@ def report(res: dict) -> str:
             out.append(f"N = 2000, K = 80, Hertz, to the terminal state: {fmt_t(k['time'])} s "
                        f"in-process, {fmt_t(k.get('process_time'))} s as a process (--full); "
                        f"terminal t = {k['end_time']:.6g}, {k['events']} events, "
-                       f"{k['steps']} steps")
+                       f"{k['steps']} steps, {k.get('closed_form', 0)} collisions in "
+                       f"closed form")
         else:
             out.append(f"N = 2000, K = 80, Hertz, to the terminal state: {k.get('error')}")
     mem = res.get("memory")
