@@ -18,8 +18,8 @@ from chainrun.solver._heap import _heap_push, _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import _clear_of, _closed_form, _fractions, _sealed_contact
 from chainrun.solver._state import (
-    B_IM, C_EPS, EV_CLOSE, EV_OPEN, F_JL, F_JR, F_T, I_LWALL, I_RWALL, I_SEALED, OPEN, SEALED, SL_T0,
-    SL_TAU, SL_V, SL_W, SL_X,
+    B_IM, C_EPS, EV_CLOSE, EV_OPEN, F_JL, F_JR, F_T, I_LWALL, I_RWALL, I_SEALED, OPEN, SEALED,
+    SL_T0, SL_TAU, SL_V, SL_W, SL_X,
 )
 
 

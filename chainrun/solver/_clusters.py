@@ -20,7 +20,8 @@ from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
     ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED,
     I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL,
-    I_RWL, I_SEALED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
+    I_RWL, I_SEALED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster,
+    _free_at,
 )
 
 

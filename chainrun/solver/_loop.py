@@ -27,7 +27,7 @@ from chainrun.solver._clusters import (
 )
 from chainrun.solver._compression import _pressed_in_step
 from chainrun.solver._events import (
-    _contact_at, _contact_load, _find_event, _load_rate, _log, _rounding,
+    _contact_at, _find_event, _load_rate, _log, _rounding,
 )
 from chainrun.solver._forces import _damping
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
@@ -40,8 +40,8 @@ from chainrun.solver._state import (
     F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
     I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS, I_POST,
     I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT,
-    ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL, ST_YIELD, TASK_RUN,
-    TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
+    ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL,
+    ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import (
     _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at, _taylor_error,

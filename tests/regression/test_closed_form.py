@@ -121,3 +121,17 @@ def test_a_gas_of_balls_against_the_reference(seed):
         assert got.shape == want.shape
         assert np.all(np.abs(got - want) <= TOL["reference"] * (1.0 + want))
     assert sol.diagnostics.energy_error < 1e-12
+
+
+def test_a_sensor_inside_sealed_contacts():
+    # ball 1 strikes ball 2, which then strikes ball 3: both contacts are sealed, and
+    # the sensor in ball 2 reads their forces from the exact interior, as it reads an
+    # integrated contact's (to the integration's accuracy)
+    line = Line.make(3, mass=[1.0, 2.0, 1.5], alpha=1.5, velocity=[1.0, 0.0, 0.0],
+                     gap=[0.3, 5.0])
+    sol = simulate_line(line, sensors=[2], sensor_dt=0.01)
+    slow = simulate_line(line, sensors=[2], sensor_dt=0.01, closed_form=False)
+    assert sol.diagnostics.closed_form_collisions == 2
+    assert slow.diagnostics.closed_form_collisions == 0
+    assert np.abs(sol.sensor_force).max() > 0.5
+    np.testing.assert_allclose(sol.sensor_force, slow.sensor_force, rtol=0, atol=1e-9)
