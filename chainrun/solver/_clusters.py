@@ -15,13 +15,13 @@ from __future__ import annotations
 from chainrun.solver._forces import _rhs
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
-from chainrun.solver._pairs import _sealed_at, _sealed_contact
+from chainrun.solver._pairs import _fractions, _sealed_at, _sealed_contact
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_T, I_DAMPED,
-    I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED, I_RWALL,
-    I_RWL, I_SEALED, OPEN, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster,
-    _free_at,
+    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_JL, F_JR, F_T,
+    I_DAMPED, I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED,
+    I_RWALL, I_RWL, I_SEALED, OPEN, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM,
+    W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -153,6 +153,15 @@ def _unseal(S, j):
     S.bx[j + 1] = xr
     S.bv[j + 1] = vr
     S.bt[j + 1] = t
+    # the impulse a wall gave so far: the momentum its ball has gained since it came
+    # in (the integration adds the rest)
+    v = S.sl[SL_V, j]
+    w = S.sl[SL_W, j]
+    fl, fr = _fractions(S, j)
+    if j == 0 and S.ints[I_LWALL] == 1:
+        S.fs[F_JL] += S.bp[B_MASS, j + 1] * (vr - (v - fr * w))
+    if j + 1 == S.bx.shape[0] - 1 and S.ints[I_RWALL] == 1:
+        S.fs[F_JR] += S.bp[B_MASS, j] * ((v + fl * w) - vl)
     S.cst[j] = OPEN
     S.ints[I_SEALED] -= 1
     return _activate(S, j, ACTIVE)

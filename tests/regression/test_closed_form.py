@@ -135,3 +135,22 @@ def test_a_sensor_inside_sealed_contacts():
     assert slow.diagnostics.closed_form_collisions == 0
     assert np.abs(sol.sensor_force).max() > 0.5
     np.testing.assert_allclose(sol.sensor_force, slow.sensor_force, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+def test_a_wall_contact_taken_back_into_the_integration(alpha):
+    # ball 1 bounces on the left wall from t = 0.05 (sealed); ball 3 strikes ball 2 at
+    # t = 0.1, a cluster next to ball 1, whose wall contact is integrated from then on:
+    # the wall's impulse is what it gave before that instant and after it
+    line = Line.make(3, alpha=alpha, velocity=[-1.0, 0.0, -5.0], gap=[1.0, 0.5],
+                     left=Wall(1.0, 1.5, 0.05))
+    sol = simulate_line(line)
+    ref = reference_line(line)
+    assert sol.diagnostics.closed_form_collisions >= 1
+    assert sol.diagnostics.momentum_error < 1e-12
+    np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
+                               atol=TOL["reference"])
+    # the line's momentum changed by the wall's impulse alone
+    p0 = float(np.sum(line.mass * line.velocity))
+    p1 = float(np.sum(line.mass * sol.final_velocity))
+    assert p1 - p0 == pytest.approx(sol.wall_impulse[0], abs=1e-12)
