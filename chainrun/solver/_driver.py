@@ -290,6 +290,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     ints[_state.I_NFREED] = freed0.size
     ints[_state.I_DIRTY] = 1 if starts.size or freed0.size else 0
     fs[_state.F_H] = 1e-3
+    fs[_state.F_HCAP] = math.inf
     fs[_state.F_TEND] = math.inf if t_end is None else float(t_end)
     fs[_state.F_TOL] = rtol
     fs[_state.F_FLOOR] = floor

@@ -36,8 +36,9 @@ from chainrun.solver._pairs import _sealed_at, _sealed_contact
 from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
     C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
-    FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT,
-    F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
+    FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HCAP, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND,
+    F_TOUT, F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL,
+    I_FORCED,
     I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS, I_POST,
     I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT,
     ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL,
@@ -544,7 +545,7 @@ def advance(S):
         tay = ht >= h
         S.ints[I_TAY] = 1 if tay else 0
         if tay:
-            h = ht
+            h = min(ht, S.fs[F_HCAP])
         order = PT if tay else 8
         tclip = min(tcol, tend)
         clipped = False
@@ -622,15 +623,20 @@ def advance(S):
                 hev += dh
             if landing == 2:
                 # the shorter step failed its error test: halve it and look again
+                # (a series step too: capped, or it would take the same step again)
                 _restore_start(S)
                 S.fs[F_H] = 0.5 * hev
+                S.fs[F_HCAP] = 0.5 * hev
                 S.ints[I_REJ] += 1
+                if hev < 8.0 * EPS * max(1.0, abs(t)):
+                    return ST_STEP_UNDERFLOW
                 continue
             if landing == 3 and err > 1.0:
                 # an event seen only on a failed step, and not there on a good one:
                 # shrink the step as for any failed step
                 _restore_start(S)
                 S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / order))
+                S.fs[F_HCAP] = S.fs[F_H]
                 continue
             S.fs[F_HLAST] = hev
             S.fs[F_T] = t + hev
@@ -650,3 +656,4 @@ def advance(S):
         S.fs[F_JR] += S.fs[F_JSR]
         S.ints[I_STEPS] += 1
         S.ints[I_POST] = 1
+        S.fs[F_HCAP] = np.inf

@@ -123,7 +123,7 @@ YIELD_STEPS = 20000
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
     F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_JL, F_JR, F_JSL, \
-    F_JSR, F_TTASK, F_NFLOAT = range(23)
+    F_JSR, F_TTASK, F_HCAP, F_NFLOAT = range(24)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
@@ -133,6 +133,10 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
+
+# F_HCAP: a cap on the next series step, set where a step landing on an event failed
+# (the series sizes its own steps, and would take the same failing step again), and
+# lifted (inf) by the next accepted step
 
 # I_PAIRS: 1 when an isolated binary collision may be taken in closed form (_pairs;
 # an elastic line without external forces, unless the caller asked otherwise);
