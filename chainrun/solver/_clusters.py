@@ -20,8 +20,8 @@ from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
     ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_JL, F_JR, F_T,
     I_DAMPED, I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED,
-    I_RWALL, I_RWL, I_SEALED, OPEN, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM,
-    W_MASS, _find_cluster, _free_at,
+    I_RWALL, I_RWL, I_SEALED, OPEN, SEALED, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD,
+    W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -165,6 +165,17 @@ def _unseal(S, j):
     S.cst[j] = OPEN
     S.ints[I_SEALED] -= 1
     return _activate(S, j, ACTIVE)
+
+
+@kernel
+def _unseal_walls(S):
+    """At the run's end, take back a sealed contact with a wall, so that the impulse
+    the wall has given so far is counted (a sealed contact counts it when it ends)."""
+    nc = S.cst.shape[0]
+    if S.ints[I_LWALL] == 1 and S.cst[0] == SEALED:
+        _unseal(S, 0)
+    if S.ints[I_RWALL] == 1 and S.cst[nc - 1] == SEALED:
+        _unseal(S, nc - 1)
 
 
 @kernel

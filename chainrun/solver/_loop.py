@@ -23,7 +23,7 @@ import numpy as np
 
 from chainrun.solver._binary import _part, _seal
 from chainrun.solver._clusters import (
-    _activate, _deactivate, _rebuild, _sync, _unseal_near_clusters,
+    _activate, _deactivate, _rebuild, _sync, _unseal_near_clusters, _unseal_walls,
 )
 from chainrun.solver._compression import _pressed_in_step
 from chainrun.solver._events import (
@@ -483,6 +483,7 @@ def advance(S):
                 return ST_GROW
             continue
         if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
+            _unseal_walls(S)
             return ST_EVENT_LIMIT
         tend = S.fs[F_TEND]
         # next free-pair collision
@@ -521,6 +522,7 @@ def advance(S):
                 S.ints[I_POST] = 1
                 continue
         if t >= tend:
+            _unseal_walls(S)
             return ST_STOP_TIME
         if S.ints[I_NCL] == 0:
             if tcol == np.inf and S.ints[I_FORCED] == 0:

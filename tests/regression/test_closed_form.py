@@ -188,3 +188,18 @@ def test_a_failed_landing_on_a_series_step_shrinks_it(closed_form):
     assert sol.diagnostics.momentum_error < 1e-12 and sol.diagnostics.energy_error < 1e-11
     other = simulate_line(line, closed_form=not closed_form)
     np.testing.assert_allclose(sol.final_velocity, other.final_velocity, rtol=0, atol=1e-6)
+
+
+def test_a_run_ending_inside_a_wall_contact_counts_its_impulse():
+    # the run ends while the ball presses the right wall: the wall has given the
+    # momentum the ball has lost so far
+    m, k, u, g = 1.3, 0.8, 0.7, 0.4
+    line = Line.make(2, mass=[m, 2.0], velocity=[0.0, u], gap=[3.0], right=Wall(k, 1.5, g))
+    tc = contact_duration(2.0, k, 1.5, u)
+    sol = simulate_line(line, t_end=g / u + 0.4 * tc)
+    assert sol.diagnostics.closed_form_collisions == 1
+    p0 = float(np.sum(line.mass * line.velocity))
+    p1 = float(np.sum(line.mass * sol.final_velocity))
+    assert p1 - p0 == pytest.approx(sol.wall_impulse[1], abs=1e-13)
+    assert sol.diagnostics.momentum_error < 1e-13
+    assert 0.0 < u - sol.final_velocity[1] < 2 * u  # (in the middle of its bounce)
