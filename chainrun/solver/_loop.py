@@ -627,7 +627,8 @@ def advance(S):
                 # (a series step too: capped, or it would take the same step again)
                 _restore_start(S)
                 S.fs[F_H] = 0.5 * hev
-                S.fs[F_HCAP] = 0.5 * hev
+                if tay:
+                    S.fs[F_HCAP] = 0.5 * hev
                 S.ints[I_REJ] += 1
                 if hev < 8.0 * EPS * max(1.0, abs(t)):
                     return ST_STEP_UNDERFLOW
@@ -637,7 +638,8 @@ def advance(S):
                 # shrink the step as for any failed step
                 _restore_start(S)
                 S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / order))
-                S.fs[F_HCAP] = S.fs[F_H]
+                if tay:
+                    S.fs[F_HCAP] = S.fs[F_H]
                 continue
             S.fs[F_HLAST] = hev
             S.fs[F_T] = t + hev

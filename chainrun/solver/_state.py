@@ -134,9 +134,9 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
 
-# F_HCAP: a cap on the next series step, set where a step landing on an event failed
-# (the series sizes its own steps, and would take the same failing step again), and
-# lifted (inf) by the next accepted step
+# F_HCAP: a cap on the next series step, set where a series step's landing on an event
+# failed (the series sizes its own steps, and would take the same failing step again),
+# and lifted (inf) by the next accepted step
 
 # I_PAIRS: 1 when an isolated binary collision may be taken in closed form (_pairs;
 # an elastic line without external forces, unless the caller asked otherwise);
