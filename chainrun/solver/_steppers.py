@@ -112,16 +112,21 @@ def _taylor(S):
     qx2 = 0.0
     qv1 = 0.0
     qv2 = 0.0
+    # (max passes a NaN by, and a wall's terms are NaN where its contact's overflowed:
+    # inf times its inverse mass 0; the sum of the terms carries them to the test)
+    terms = 0.0
     for p in range(m):
         ax = 1.0 / (tol + 64.0 * EPS * abs(X0[p]))
         av = 1.0 / (tol + 64.0 * EPS * abs(V0[p]))
         t1 = abs(TX[PT, p])
         t2 = abs(TX[PT - 1, p])
+        terms += t1 + t2
         qx1 = max(qx1, t1 * ax)
         qx2 = max(qx2, t2 * ax)
         qv1 = max(qv1, PT * t1 * av)
         qv2 = max(qv2, (PT - 1) * t2 * av)
-    if not (qx1 < np.inf and qx2 < np.inf and qv1 < np.inf and qv2 < np.inf):
+    if not (qx1 < np.inf and qx2 < np.inf and qv1 < np.inf and qv2 < np.inf
+            and terms < np.inf):
         return 0.0
     S.fs[F_QX1] = qx1
     S.fs[F_QX2] = qx2
