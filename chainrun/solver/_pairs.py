@@ -38,6 +38,21 @@ from chainrun.solver._state import (
 _HALF_PI = 0.5 * math.pi
 
 
+@kernel(inline="always")
+def _lentz(e, c, d):
+    """One term e of a continued fraction 1 / (1 + e1 / (1 + e2 / ...)) by the modified
+    Lentz method: its (c, d) and the factor it multiplies the value by."""
+    tiny = 1e-300
+    d = 1.0 + e * d
+    if abs(d) < tiny:
+        d = tiny
+    c = 1.0 + e / c
+    if abs(c) < tiny:
+        c = tiny
+    d = 1.0 / d
+    return c, d, c * d
+
+
 @kernel
 def _betainc(a, b, x):
     """The regularized incomplete beta function I_x(a, b), 0 <= x <= 1, a, b > 0: its
@@ -50,35 +65,18 @@ def _betainc(a, b, x):
         return 1.0
     if x > (a + 1.0) / (a + b + 2.0):
         return 1.0 - _betainc(b, a, 1.0 - x)
-    tiny = 1e-300
     front = math.exp(a * math.log(x) + b * math.log1p(-x)
                      - (math.lgamma(a) + math.lgamma(b) - math.lgamma(a + b))) / a
+    # the fraction's first level, 1 / (1 - (a + b) x / (a + 1))
     c = 1.0
     d = 1.0 - (a + b) * x / (a + 1.0)
-    if abs(d) < tiny:
-        d = tiny
-    d = 1.0 / d
+    d = 1.0 / (d if abs(d) >= 1e-300 else 1e-300)
     h = d
     for m in range(1, 300):
         m2 = 2 * m
-        e = m * (b - m) * x / ((a + m2 - 1.0) * (a + m2))
-        d = 1.0 + e * d
-        if abs(d) < tiny:
-            d = tiny
-        c = 1.0 + e / c
-        if abs(c) < tiny:
-            c = tiny
-        d = 1.0 / d
-        h *= d * c
-        e = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1.0))
-        d = 1.0 + e * d
-        if abs(d) < tiny:
-            d = tiny
-        c = 1.0 + e / c
-        if abs(c) < tiny:
-            c = tiny
-        d = 1.0 / d
-        step = d * c
+        c, d, step = _lentz(m * (b - m) * x / ((a + m2 - 1.0) * (a + m2)), c, d)
+        h *= step
+        c, d, step = _lentz(-(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1.0)), c, d)
         h *= step
         if abs(step - 1.0) < EPS:
             break
