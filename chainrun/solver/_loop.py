@@ -416,8 +416,15 @@ def _post_step(S):
     if k != 0:
         S.ints[I_EVK] = 0
         _sync(S)
-        if not _apply_event(S, S.ints[I_EVJ], k):
+        j = S.ints[I_EVJ]
+        if not _apply_event(S, j, k):
             return False
+        if k == EV_UNLOAD and _due(S, j) == EV_OPEN:
+            # the load vanished with the compression (in a slow collision, whose
+            # damping goes as c^beta): it opens now, or its balls, held without force,
+            # would part with no crossing left for a step to find
+            if not _apply_event(S, j, EV_OPEN):
+                return False
     elif S.ints[I_M] > 0:
         if _dormant_due(S):
             _sync(S)

@@ -312,3 +312,22 @@ def test_a_load_that_touches_zero_and_rises_reloads():
     assert kinds[i - 1] == EventKind.UNLOAD
     assert sol.diagnostics.energy_error < 1e-10
     assert sol.diagnostics.momentum_error < 1e-10
+
+
+def test_a_load_that_vanishes_with_the_compression_opens_the_contact():
+    """Eighty balls strike a line of 1000 with Kuwabara-Kono damping, integrated: at
+    t = 4.61e6 a slow collision of balls 258 and 259 (0-based) unloads within rounding
+    of its compression's 0 (the damping goes as c^beta). The contact must open at that
+    instant, not stay held without force while its balls part: no crossing was left
+    for a step to find, the cluster's steps grew without end, and the run ended
+    non-finite at t = 8.5e307."""
+    line = Line.make(1000, k=80, alpha=1.5, damping=0.01, damping_exponent=0.5)
+    sol = simulate_line(line, closed_form=False)
+    assert sol.terminal, sol.message
+    pair = sol.event_contact == 258
+    kinds, times = sol.event_kind[pair], sol.event_time[pair]
+    last = int(np.flatnonzero(kinds == EventKind.UNLOAD)[-1])
+    assert kinds[last + 1] == EventKind.OPEN and times[last + 1] == times[last]
+    assert times[last] > 4e6
+    assert sol.diagnostics.energy_error < 1e-10
+    assert sol.diagnostics.momentum_error < 1e-10
