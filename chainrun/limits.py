@@ -43,8 +43,9 @@ __all__ = [
 #: hp_s`` (3N each: 9 x 8), ``freed`` (2N int64: 16), one contact per ball (``cst``
 #: int8, ``lvl`` float64, ``stamp`` int64: 17), N/2 clusters (``clo, chi, coff`` int64
 #: and ``cen`` float64: 16), and the balls' and contacts' parameters (``bp``: 3 x 8,
-#: ``cp``: 5 x 8; 9 x 8 on a damped line, whose 32 more bytes per ball the estimate
-#: leaves to its margin) with the sealed collisions' closed forms (``sl``: 6 x 8).
+#: ``cp``: 5 x 8; 9 x 8 on a damped line) with the sealed collisions' closed forms
+#: (``sl``: 6 x 8; 11 x 8 on a damped line, whose 72 more bytes per ball are not
+#: counted).
 STATE_BYTES_PER_BALL = 9 * 8 + 9 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8 + 6 * 8
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages and 2 rows of a damped

@@ -15,13 +15,15 @@ from __future__ import annotations
 from chainrun.solver._forces import _rhs
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
-from chainrun.solver._pairs import _fractions, _sealed_at, _sealed_contact
+from chainrun.solver._pairs import (
+    _damped_seal, _fractions, _sealed_at, _sealed_contact, _sealed_lost,
+)
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_ETA, C_HELD, C_KAPPA, F_JL, F_JR, F_T,
-    I_DAMPED, I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL, I_NFREED,
-    I_RWALL, I_RWL, I_SEALED, OPEN, SEALED, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD,
-    W_IM, W_MASS, _find_cluster, _free_at,
+    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_DISS, C_ETA, C_HELD, C_KAPPA, F_DISS, F_JL,
+    F_JR, F_T, I_DAMPED, I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL,
+    I_NFREED, I_RWALL, I_RWL, I_SEALED, OPEN, SEALED, SL_PH, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA,
+    W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
 
 
@@ -162,16 +164,33 @@ def _unseal(S, j):
         S.fs[F_JL] += S.bp[B_MASS, j + 1] * (vr - (v - fr * w))
     if j + 1 == S.bx.shape[0] - 1 and S.ints[I_RWALL] == 1:
         S.fs[F_JR] += S.bp[B_MASS, j] * ((v + fl * w) - vl)
+    # a damped contact: the energy dissipated so far, and its force held at 0 past
+    # its unload (the integration dissipates the rest)
+    held = False
+    if _damped_seal(S, j):
+        lost = _sealed_lost(S, j, t)
+        S.cp[C_DISS, j] += lost
+        S.fs[F_DISS] += lost
+        held = S.sl[SL_PH, j] != 0.0
     S.cst[j] = OPEN
     S.ints[I_SEALED] -= 1
-    return _activate(S, j, ACTIVE)
+    ok = _activate(S, j, ACTIVE)
+    if held:
+        S.cp[C_HELD, j] = 1.0
+    return ok
 
 
 @kernel
-def _unseal_walls(S):
+def _unseal_at_end(S):
     """At the run's end, take back a sealed contact with a wall, so that the impulse
-    the wall has given so far is counted (a sealed contact counts it when it ends)."""
+    the wall has given so far is counted, and on a damped line every sealed contact,
+    so that the energy dissipated so far is (a sealed contact counts them when it
+    ends)."""
     nc = S.cst.shape[0]
+    if S.ints[I_SEALED] > 0 and S.ints[I_DAMPED] == 1:
+        for j in range(nc):
+            if S.cst[j] == SEALED:
+                _unseal(S, j)
     if S.ints[I_LWALL] == 1 and S.cst[0] == SEALED:
         _unseal(S, 0)
     if S.ints[I_RWALL] == 1 and S.cst[nc - 1] == SEALED:

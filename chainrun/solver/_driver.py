@@ -299,8 +299,8 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_FORCED] = 1 if P.forced else 0
     ints[_state.I_DAMPED] = 1 if P.damped else 0
-    # isolated collisions in closed form: elastic, and free flight in straight lines
-    ints[_state.I_PAIRS] = 1 if closed_form and not P.damped and not P.forced else 0
+    # isolated collisions taken whole: free flight in straight lines
+    ints[_state.I_PAIRS] = 1 if closed_form and not P.forced else 0
     ints[_state.I_LWALL] = P.lw
     ints[_state.I_RWALL] = P.rw
     ints[_state.I_LWL] = ints[_state.I_RWL] = -1
@@ -310,7 +310,8 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
         bx=P.y0.copy(), bv=P.v0.copy(), bt=np.zeros(nb),
         sep_t=np.full(nb, np.nan), sep_v=np.full(nb, np.nan),
         bmap=np.full(nb, -1, np.int64), bp=bp,
-        cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp, sl=np.zeros((6, ncont)),
+        cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp,
+        sl=np.zeros((_state.NSL_DAMPED if P.damped else _state.NSL, ncont)),
         clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
         **_alloc_window(min(nb, _INITIAL_WINDOW)),
         # every contact can be predicted twice (from the freed balls on either side),

@@ -19,7 +19,7 @@ import numpy as np
 
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    F_ALPHA, I_DAMPED, I_M, I_MODE, I_UNIT, MODE_HERTZ, MODE_LINEAR, MODE_MIXED,
+    C_ALPHA, C_KAPPA, F_ALPHA, I_DAMPED, I_M, I_MODE, I_UNIT, MODE_HERTZ, MODE_LINEAR, MODE_MIXED,
     MODE_POWER, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM,
 )
 
@@ -123,6 +123,16 @@ def _load(kappa, alpha, eta, beta, c, w):
     """kappa c|c|^(alpha-1) + eta |c|^beta w: a damped contact's force before it is held
     at 0 (negative: it would pull)."""
     return kappa * _force(c, MODE_MIXED, alpha) + eta * _damping(c, w, beta)
+
+
+@kernel(inline="always")
+def _stored(S, j, c):
+    """The elastic energy kappa c^(alpha+1) / (alpha+1) of contact j at compression c
+    (0 apart)."""
+    if not c > 0.0:
+        return 0.0
+    a = S.cp[C_ALPHA, j]
+    return S.cp[C_KAPPA, j] * c ** (a + 1.0) / (a + 1.0)
 
 
 @kernel

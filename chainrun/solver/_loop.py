@@ -21,27 +21,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from chainrun.solver._binary import _part, _seal
+from chainrun.solver._binary import _seal, _sealed_end
 from chainrun.solver._clusters import (
-    _activate, _deactivate, _rebuild, _sync, _unseal_near_clusters, _unseal_walls,
+    _activate, _deactivate, _rebuild, _sync, _unseal_at_end, _unseal_near_clusters,
 )
 from chainrun.solver._compression import _pressed_in_step
 from chainrun.solver._events import (
     _contact_at, _find_event, _load_rate, _log, _rounding,
 )
-from chainrun.solver._forces import _damping
+from chainrun.solver._forces import _damping, _stored
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
-from chainrun.solver._pairs import _sealed_at, _sealed_contact
+from chainrun.solver._pairs import _sealed_at, _sealed_contact, _sealed_lost
 from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
     C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
     FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HCAP, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND,
     F_TOUT, F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL,
     I_FORCED, I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS,
-    I_POST, I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SERIES_CLUSTERS, ST_EVENT_LIMIT,
-    ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME, ST_TERMINAL,
-    ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at, _tw,
+    I_POST, I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SEALED, SERIES_CLUSTERS,
+    ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
+    ST_TERMINAL, ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at,
+    _tw,
 )
 from chainrun.solver._steppers import (
     _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at, _taylor_error,
@@ -103,16 +104,6 @@ _GAUSS_W = np.array([0.05061426814518813, 0.11119051722668724, 0.156853322938943
                      0.11119051722668724, 0.05061426814518813])
 
 
-@kernel(inline="always")
-def _stored(S, j, c):
-    """The elastic energy kappa c^(alpha+1) / (alpha+1) of contact j at compression c
-    (0 apart)."""
-    if not c > 0.0:
-        return 0.0
-    a = S.cp[C_ALPHA, j]
-    return S.cp[C_KAPPA, j] * c ** (a + 1.0) / (a + 1.0)
-
-
 @kernel
 def _dissipated_at(S, th):
     """The energy dissipated up to t_prev + th * h_last (the last step is counted in
@@ -170,6 +161,10 @@ def _snapshot(S, tout):
         S.ox[b], S.ov[b] = _state_at(S, b, tout, th)
     if S.ints[I_DAMPED] == 1:
         S.fs[F_DOUT] = _dissipated_at(S, th)
+        if S.ints[I_SEALED] > 0:  # (a sealed contact counts its own when it ends)
+            for j in range(S.cst.shape[0]):
+                if S.cst[j] == SEALED:
+                    S.fs[F_DOUT] += _sealed_lost(S, j, tout)
 
 
 @kernel
@@ -489,7 +484,7 @@ def advance(S):
                 return ST_GROW
             continue
         if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
-            _unseal_walls(S)
+            _unseal_at_end(S)
             return ST_EVENT_LIMIT
         tend = S.fs[F_TEND]
         # next free-pair collision
@@ -516,7 +511,7 @@ def advance(S):
                 if j >= nc or (S.ints[I_PAIRS] == 1 and _seal(S, j)):
                     # a sealed collision ends, or one begins (see _binary)
                     if j >= nc:
-                        _part(S, j - nc)
+                        _sealed_end(S, j - nc)
                     else:
                         S.ints[I_NSEAL] += 1
                     nsteps += 1
@@ -528,7 +523,7 @@ def advance(S):
                 S.ints[I_POST] = 1
                 continue
         if t >= tend:
-            _unseal_walls(S)
+            _unseal_at_end(S)
             return ST_STOP_TIME
         if S.ints[I_NCL] == 0:
             if tcol == np.inf and S.ints[I_FORCED] == 0:

@@ -16,6 +16,12 @@ velocity reversed. Through the contact the centre of mass moves at its constant
 velocity V, the left ball at x_l = X + f_l r and the right at x_r = X - f_r r
 (f_l = m_r / (m_l + m_r), f_r = m_l / (m_l + m_r); a wall's f is 0).
 
+A damped contact has no such closed form: its relative motion is integrated once, at
+the meeting, to its unload (where the force would pull) and its coefficient of
+restitution e, and again up to any instant inside asked for (``_pair_damped``). It
+then ends as an elastic one does, the relative velocity reversed and times e, after
+the unload is logged; it has dissipated all but e^2 of the relative motion's energy.
+
 Such a contact is *sealed* (``SEALED``): the step loop applies it whole, logs its
 close and open, and never integrates it. Since r >= 0 throughout, the left ball never
 falls behind the centre of mass's line and the right ball never gets ahead of it: a
@@ -30,9 +36,12 @@ from __future__ import annotations
 
 import math
 
+from chainrun.solver._forces import _stored
 from chainrun.solver._jit import kernel
+from chainrun.solver._pair_damped import _damped_outcome, _damped_relative
 from chainrun.solver._state import (
-    B_IM, C_ALPHA, C_KAPPA, EPS, SEALED, SL_CMAX, SL_T0, SL_TAU, SL_V, SL_W, SL_X, _free_at,
+    B_IM, C_ALPHA, C_BETA, C_ETA, C_KAPPA, EPS, SEALED, SL_CMAX, SL_E, SL_G, SL_PH, SL_RU,
+    SL_T0, SL_TAU, SL_TU, SL_V, SL_W, SL_X, _free_at,
 )
 
 _HALF_PI = 0.5 * math.pi
@@ -173,6 +182,57 @@ def _fractions(S, j):
 
 
 @kernel(inline="always")
+def _damped_seal(S, j):
+    """Whether sealed contact j is damped (its sl rows SL_TU.. exist on a damped line
+    only; an undamped contact there has G = 0)."""
+    return S.sl.shape[0] > SL_G and S.sl[SL_G, j] > 0.0
+
+
+@kernel
+def _damped_at(S, j, s):
+    """(r, r') of damped sealed contact j at s >= 0 after its compression was 0."""
+    return _damped_relative(S.cp[C_ALPHA, j], S.cp[C_BETA, j], S.sl[SL_G, j], S.sl[SL_W, j],
+                            S.sl[SL_CMAX, j], S.sl[SL_TU, j], S.sl[SL_RU, j],
+                            S.sl[SL_E, j], s)
+
+
+@kernel(inline="always")
+def _unload_ahead(S, j):
+    """Whether damped sealed contact j has yet to unload (with the compression left
+    at its unload > 0: where the load vanishes only with it, there is none)."""
+    return _damped_seal(S, j) and S.sl[SL_PH, j] == 0.0 and S.sl[SL_RU, j] > 0.0
+
+
+@kernel(inline="always")
+def _first_end(S, j):
+    """When the heap next calls on sealed contact j: its unload, or its end (see
+    _binary._sealed_end)."""
+    if _unload_ahead(S, j):
+        return S.sl[SL_T0, j] + S.sl[SL_TU, j]
+    return S.sl[SL_T0, j] + S.sl[SL_TAU, j]
+
+
+@kernel
+def _sealed_lost(S, j, t):
+    """The energy damped sealed contact j has dissipated by t (0 for an elastic one):
+    what its relative motion came in with, less its relative kinetic and elastic
+    energy then; all but e^2 of it once the contact has ended."""
+    if not _damped_seal(S, j):
+        return 0.0
+    s = t - S.sl[SL_T0, j]
+    if s <= 0.0:
+        return 0.0
+    im = S.bp[B_IM, j] + S.bp[B_IM, j + 1]
+    w = S.sl[SL_W, j]
+    e_in = 0.5 * w * w / im
+    if s >= S.sl[SL_TAU, j]:
+        e = S.sl[SL_E, j]
+        return e_in * (1.0 - e * e)
+    r, rd = _damped_at(S, j, s)
+    return e_in - 0.5 * rd * rd / im - _stored(S, j, r)
+
+
+@kernel(inline="always")
 def _sealed_contact(S, b):
     """The sealed contact ball b is in, or -1."""
     if b >= 1 and S.cst[b - 1] == SEALED:
@@ -191,6 +251,8 @@ def _sealed_at(S, j, b, t):
     w = S.sl[SL_W, j]
     if s <= 0.0:
         r, rd = w * s, w
+    elif _damped_seal(S, j):
+        r, rd = _damped_at(S, j, s)
     elif s >= tau:
         r, rd = -w * (s - tau), -w
     else:
@@ -239,7 +301,14 @@ def _closed_form(S, j, t):
     w = vl - vr
     if not w > 0.0:
         return False
-    rmax, tau = _greatest(kappa, alpha, im, w)
+    # (the rows of a damped line: its contacts' damping, and the unload of sl)
+    damped = S.sl.shape[0] > SL_G and S.cp[C_ETA, j] > 0.0
+    g = tu = ru = e = 0.0
+    if damped:
+        rmax, g, tu, ru, e, tau = _damped_outcome(kappa, alpha, S.cp[C_ETA, j],
+                                                  S.cp[C_BETA, j], im, w)
+    else:
+        rmax, tau = _greatest(kappa, alpha, im, w)
     t0 = t - (xl - xr) / w
     if not (math.isfinite(tau) and tau > 0.0 and math.isfinite(t0 + tau)):
         return False
@@ -250,4 +319,16 @@ def _closed_form(S, j, t):
     S.sl[SL_V, j] = fr * vl + fl * vr
     S.sl[SL_W, j] = w
     S.sl[SL_CMAX, j] = rmax
+    if S.sl.shape[0] > SL_G:
+        if damped:
+            S.sl[SL_TU, j] = tu
+            S.sl[SL_E, j] = e
+            S.sl[SL_RU, j] = ru
+            S.sl[SL_G, j] = g
+        else:
+            S.sl[SL_TU, j] = tau
+            S.sl[SL_E, j] = 1.0
+            S.sl[SL_RU, j] = 0.0
+            S.sl[SL_G, j] = 0.0
+        S.sl[SL_PH, j] = 0.0
     return True

@@ -139,7 +139,7 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # and lifted (inf) by the next accepted step
 
 # I_PAIRS: 1 when an isolated binary collision may be taken in closed form (_pairs;
-# an elastic line without external forces, unless the caller asked otherwise);
+# a line without external forces, unless the caller asked otherwise);
 # I_NSEAL: how many were; I_SEALED: how many are sealed now (the checks for them are
 # skipped while there are none)
 
@@ -174,8 +174,18 @@ C_KAPPA, C_ALPHA, C_EPS, C_DORM, C_LOC, C_ETA, C_BETA, C_HELD, C_DISS = range(9)
 W_IM, W_ACC, W_MASS, W_ALPHA, W_ETA, W_BETA, W_HELD = range(7)
 # per contact, sl: a sealed collision's closed form (see _pairs): the time its
 # compression was 0 going in, its duration, the centre of mass's position then and its
-# velocity, the approach speed, and the greatest compression
+# velocity, the approach speed, and the greatest compression (a damped contact's
+# length scale D, see _pair_damped)
 SL_T0, SL_TAU, SL_X, SL_V, SL_W, SL_CMAX = range(6)
+# and on a damped line only (NSL_DAMPED rows): the time from SL_T0 to the unload (to
+# the end, for an elastic contact), the coefficient of restitution, the compression at
+# the unload, the scaled damping G (0: elastic), and 1 once the unload is past
+SL_TU, SL_E, SL_RU, SL_G, SL_PH = range(6, 11)
+NSL, NSL_DAMPED = 6, 11
+#: relative and absolute tolerances of a damped pair's scaled relative motion, whose
+#: variables are of order 1 (see _pair_damped)
+PAIR_RTOL = 1e-13
+PAIR_ATOL = 1e-18
 # extra rows of KV on a damped line: the stage velocities, and each lane's energy
 # dissipated over the step being taken (see _forces._damped_forces)
 KV_VS = _NSE
