@@ -43,15 +43,19 @@ def _seal(S, j):
         return False
     if _sealed_contact(S, j) >= 0 or _sealed_contact(S, j + 1) >= 0:
         return False
+    # the neighbours' states first: a damped contact's outcome costs an integration
+    last = S.bx.shape[0] - 1
+    if j >= 1 and not _free_neighbour(S, j, j - 1):
+        return False
+    if j + 2 <= last and not _free_neighbour(S, j, j + 2):
+        return False
     t = S.fs[F_T]
     if not _closed_form(S, j, t):
         return False
     tend = S.sl[SL_T0, j] + S.sl[SL_TAU, j]
-    if j >= 1 and not (_free_neighbour(S, j, j - 1) and _clear_of(S, j, j - 1, t, tend)):
+    if j >= 1 and not _clear_of(S, j, j - 1, t, tend):
         return False
-    last = S.bx.shape[0] - 1
-    if j + 2 <= last and not (_free_neighbour(S, j, j + 2)
-                              and _clear_of(S, j, j + 2, t, tend)):
+    if j + 2 <= last and not _clear_of(S, j, j + 2, t, tend):
         return False
     S.cst[j] = SEALED
     S.ints[I_SEALED] += 1
