@@ -308,19 +308,26 @@ def _pair_step() -> list[str]:
     ku = [f"ku{i}" for i in range(ns)]
     lines = [
         "@kernel",
+        "def _pair_force(s, u, g, alpha, beta):",
+        '    """-(s |s|^(alpha-1) + g |s|^beta u): the scaled pair\'s acceleration (a call, not',
+        '    inlined: twelve copies of the law would cost compile time, not run time)."""',
+        "    return -_load(1.0, alpha, g, beta, s, u)",
+        "",
+        "",
+        "@kernel",
         "def _pair_step(s, u, h, g, alpha, beta):",
         '    """One DOP853 step of s\' = u, u\' = -(s |s|^(alpha-1) + g |s|^beta u) from (s, u):',
         "    (s, u) after h, and the error estimate scaled by PAIR_RTOL (accepted at <= 1).",
         '    """',
         "    ks0 = u",
-        "    ku0 = -_load(1.0, alpha, g, beta, s, u)",
+        "    ku0 = _pair_force(s, u, g, alpha, beta)",
     ]
     for i in range(1, ns):
         lines += [
             f"    si = s + h * ({_scalar_combo(A[i, :i], ks[:i])})",
             f"    ui = u + h * ({_scalar_combo(A[i, :i], ku[:i])})",
             f"    ks{i} = ui",
-            f"    ku{i} = -_load(1.0, alpha, g, beta, si, ui)",
+            f"    ku{i} = _pair_force(si, ui, g, alpha, beta)",
         ]
     lines += [
         f"    s1 = s + h * ({_scalar_combo(B, ks[:ns])})",
