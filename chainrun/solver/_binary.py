@@ -66,7 +66,7 @@ def _seal(S, j):
     return True
 
 
-@kernel
+@kernel(inline="always")
 def _sealed_end(S, j):
     """The heap calls on sealed contact j now: at a damped contact's unload (logged;
     the balls part with the force held at 0, and the heap calls again at the

@@ -85,7 +85,7 @@ def _walk(g, alpha, beta, tau_stop):
     return math.nan, math.nan, math.nan, True
 
 
-@kernel
+@kernel(inline="always")
 def _land(s, u, tau, hb, fb, sb, ub, g, alpha, beta):
     """The end inside the step of length hb from (tau, s, s'): regula falsi (Illinois)
     on the step's length, each trial a step from the same start (shorter, so within
@@ -116,7 +116,7 @@ def _land(s, u, tau, hb, fb, sb, ub, g, alpha, beta):
     return tau + hb, sb, ub, True
 
 
-@kernel
+@kernel(inline="always")
 def _damped_outcome(kappa, alpha, eta, beta, im, w):
     """(D, G, t_u, r_u, e, tau) of a damped contact entered at speed w > 0 between
     balls of inverse masses summing to im: the length scale, the scaled damping, the
@@ -134,7 +134,7 @@ def _damped_outcome(kappa, alpha, eta, beta, im, w):
     return d, g, tu, ru, e, tu + ru / (e * w)
 
 
-@kernel
+@kernel(inline="always")
 def _damped_relative(alpha, beta, g, w, d, tu, ru, e, s):
     """(r, r') of a damped contact at s >= 0 after its compression was 0 going in."""
     if s >= tu:
