@@ -16,6 +16,13 @@ the closed form's distance from either is to be read against it::
 
     .venv/bin/python -m benchmarks.cascade                 # N = 2000, K = 80 (~10 min)
     .venv/bin/python -m benchmarks.cascade --n 400 --k 40  # seconds
+
+``--damping ETA --damping-exponent BETA`` damps every contact (isolated damped
+collisions are taken whole too), and ``--random`` gives the line the bench's random
+masses and stiffnesses (``random_events.random_line``), struck by its first ball::
+
+    .venv/bin/python -m benchmarks.cascade --n 1000 --k 80 --damping 0.01 --damping-exponent 0.5
+    .venv/bin/python -m benchmarks.cascade --n 300 --random --damping 0.01 --damping-exponent 0.25
 """
 
 from __future__ import annotations
@@ -32,20 +39,37 @@ def main(argv=None) -> int:
     parser.add_argument("--k", type=int, default=80)
     parser.add_argument("--alpha", type=float, default=1.5)
     parser.add_argument("--rtol", type=float, default=None)
+    parser.add_argument("--damping", type=float, default=0.0)
+    parser.add_argument("--damping-exponent", type=float, default=0.0)
+    parser.add_argument("--random", action="store_true",
+                        help="the bench's random masses and stiffnesses, K = 1")
     args = parser.parse_args(argv)
-    from chainrun.solver import DEFAULT_RTOL, load_kernels, simulate
+    from chainrun.solver import DEFAULT_RTOL, Line, load_kernels, simulate_line
+
+    from benchmarks.random_events import random_line
 
     rtol = DEFAULT_RTOL if args.rtol is None else args.rtol
+    k = 1 if args.random else args.k
+    if args.random:
+        base = random_line(args.n)
+        line = Line.make(args.n, alpha=args.alpha, mass=base.mass, stiffness=base.stiffness,
+                         damping=args.damping, damping_exponent=args.damping_exponent)
+    else:
+        line = Line.make(args.n, k=k, alpha=args.alpha, damping=args.damping,
+                         damping_exponent=args.damping_exponent)
     load_kernels()
     runs = {}
-    print(f"N = {args.n}, K = {args.k}, alpha = {args.alpha:g}, rtol = {rtol:g}")
+    print(f"N = {args.n}, K = {k}, alpha = {args.alpha:g}, rtol = {rtol:g}"
+          + (", random masses and stiffnesses" if args.random else "")
+          + (f", damping {args.damping:g}, exponent {args.damping_exponent:g}"
+             if args.damping else ""))
     print(f"{'run':<22} {'s':>8} {'terminal t':>12} {'events':>9} {'closed form':>12}"
           f" {'steps':>9} {'window':>7}")
     for name, kw in (("closed form", dict(rtol=rtol)),
                      ("integrated", dict(rtol=rtol, closed_form=False)),
                      ("integrated, rtol/10", dict(rtol=rtol / 10, closed_form=False))):
         t0 = time.perf_counter()
-        sol = simulate(args.n, args.k, args.alpha, **kw)
+        sol = simulate_line(line, **kw)
         dt = time.perf_counter() - t0
         d = sol.diagnostics
         runs[name] = sol.final_velocity
