@@ -56,7 +56,7 @@ class RunSummary:
     steps: int
     rejected_steps: int
     max_window: int
-    closed_form: int  # collisions taken whole, in closed form (0 in older files)
+    closed_form: int  # isolated collisions taken whole (0 in older files)
     wall_time: float
     momentum_error: float
     energy_error: float

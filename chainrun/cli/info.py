@@ -42,7 +42,7 @@ def render(s) -> str:
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "
         f"at most {s.max_window} balls integrated at once, {s.wall_time:.2f} s",
-        *([f"          {s.closed_form} isolated collisions taken whole, in closed form"]
+        *([f"          {s.closed_form} isolated collisions taken whole"]
           if s.closed_form else []),
         f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",

@@ -120,7 +120,8 @@ class Diagnostics:
     ``_projection._project_energy``); energy_correction is the sum of those corrections,
     relative like energy_error, the honest measure of the integration error that the
     projection removes. closed_form_collisions counts the isolated binary collisions
-    taken whole, in closed form, rather than integrated (``_pairs``).
+    taken whole (in closed form, or a damped pair's own relative motion) rather than
+    integrated with the clusters (``_pairs``).
     """
 
     steps: int
@@ -298,10 +299,11 @@ def simulate(
         The sampling interval, > 0; required with ``sensors``.
     closed_form : bool
         Take an isolated binary collision (two free balls, or a ball and a wall, that
-        no third body can reach while they touch) whole, in closed form: its outcome
-        and duration are exact, its interior is evaluated exactly for snapshots and
-        sensors, and it costs no steps. Only on a line without damping or external
-        forces. False integrates every collision (to compare the two).
+        no third body can reach while they touch) whole: its outcome and duration are
+        exact (a damped one's from the pair's relative motion alone, integrated to
+        1e-13), its interior is evaluated for snapshots and sensors, and it costs no
+        steps of the other clusters. Only on a line without external forces. False
+        integrates every collision (to compare the two).
 
     Returns
     -------

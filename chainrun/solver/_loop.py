@@ -12,9 +12,10 @@ One pass of the loop rebuilds the compact arrays after a change of structure
 releases that the last step ended on (``_post_step``, ``_settle``), jumps over free
 flight to the next predicted collision (``_heap``), or takes one accepted step
 (``_steppers``) that ends on the earliest event found in it (``_events``). A predicted
-collision that nothing else can reach while it lasts is taken whole, in closed form,
-and its end waits in the heap (``_binary``, ``_pairs``): it costs no steps and does
-not hold back the clusters' step size.
+collision that nothing else can reach while it lasts is taken whole (in closed form,
+or a damped pair's own relative motion), and its end waits in the heap (``_binary``,
+``_pairs``, ``_pair_damped``): it costs no steps and does not hold back the
+clusters' step size.
 """
 
 from __future__ import annotations
