@@ -300,7 +300,7 @@ def _scalar_combo(coefs, names: list[str]) -> str:
 
 def _pair_step() -> list[str]:
     """One DOP853 step of a damped pair's scaled relative motion (see _pair_damped)."""
-    A, B, C = dop.A, dop.B, dop.C
+    A, B = dop.A, dop.B
     ns = dop.N_STAGES
     # (the error estimate's weight on the step's end, a 13th stage, is 0)
     assert dop.E5[ns] == 0.0 and dop.E3[ns] == 0.0
