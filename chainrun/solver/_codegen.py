@@ -5,10 +5,10 @@ previous stages; for x'' = a(x) they are taken in Nystrom form, on the accelerat
 alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen balls
 spends its time in loop overhead; written out with the coefficients as literals, each
 stage is one pass over the balls. The Taylor series' sums (``_series_orders``) loop
-over orders with a tile's lanes written out, and its bounds (``_series_bounds``) are
-written out whole. The coefficients are computed exactly (``_exact_product``), so the
-text is the same on every machine. This script writes the whole of ``_generated.py``
-from scipy's DOP853 tableau and the series' orders::
+over orders with a tile's lanes written out, as does a linear line's
+(``_linear_orders``), and its bounds (``_series_bounds``) are written out whole. The coefficients are computed exactly
+(``_exact_product``), so the text is the same on every machine. This script writes
+the whole of ``_generated.py`` from scipy's DOP853 tableau and the series' orders::
 
     python -m chainrun.solver._codegen          # rewrite _generated.py
     python -m chainrun.solver._codegen --check  # exit 1 if it is out of date
@@ -222,6 +222,44 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",
         f"        W[_tw(p, {pt})] = TX[{pt}, p] - TX[{pt}, p + 1]",
+    ]
+    return lines
+
+
+def _linear(pt: int, tile: int) -> list[str]:
+    """A linear line's orders of the series (see _taylor), a pass across the window per
+    order: each lane's compression c_k into the work tiles, and its force kappa c_k.
+
+    Each full tile's lanes are written out, loaded into locals before anything is
+    stored, so that the compiler packs them into vector instructions (it cannot prove
+    that the rows it stores to do not overlap those it reads, and keeps a loop over
+    the lanes, which stores at a computed place in the tiles, scalar); the last,
+    partial tile is a loop. The arithmetic is that of a loop over the lanes.
+    """
+    lanes = range(tile)
+    xs = range(tile + 1)
+    lines = [
+        "@kernel",
+        "def _linear_orders(TX, W, G, MK, IM, nc, unit):",
+        '    """Orders 1 and up of a linear line\'s series (see _taylor): each lane\'s',
+        "    compression c_k into the work tiles and its force kappa c_k into G (one row, so",
+        '    that the pass over the balls, _series_terms, reads neighbours with no branch)."""',
+        "    nf = nc // SERIES_TILE",
+        f"    for k in range(1, {pt + 1}):",
+        "        for t in range(nf):",
+        "            b = t * SERIES_TILE",
+        "            c = t * TILE_STRIDE + k * SERIES_TILE",
+        *[f"            x{i} = TX[k, b + {i}]" for i in xs],
+        *[f"            m{i} = MK[b + {i}]" for i in lanes],
+        *[f"            d{i} = x{i} - x{i + 1}" for i in lanes],
+        *[f"            W[c + {i}] = d{i}" for i in lanes],
+        *[f"            G[b + {i}] = d{i} * m{i}" for i in lanes],
+        "        for p in range(nf * SERIES_TILE, nc):",
+        "            d = TX[k, p] - TX[k, p + 1]",
+        "            W[_tw(p, k)] = d",
+        "            G[p] = d * MK[p]",
+        f"        if k < {pt - 1}:",
+        "            _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)",
     ]
     return lines
 
@@ -481,6 +519,7 @@ def generate() -> str:
     for r in range(dop.D.shape[0]):
         lines.append(f"    FX[{3 + r}, p] = h * {_combo(dx[r], 'KV', 'h')}")
         lines.append(f"    FV[{3 + r}, p] = {_combo(dop.D[r], 'KV', 'h')}")
+    lines += ["", ""] + _linear(PT, SERIES_TILE)
     lines += ["", ""] + _series(PT, SERIES_TILE, False) + ["", ""]
     lines += _series(PT, SERIES_TILE, True) + ["", ""] + _bounds(PT, DB)
     lines += ["", ""] + _pair_step()

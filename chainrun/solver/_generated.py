@@ -314,6 +314,105 @@ def _dense_rows(S, p):
     FV[6, p] = h * (-25.69393346270375 * KV[0, p] + -154.18974869023643 * KV[5, p] + -231.5293791760455 * KV[6, p] + 357.6391179106141 * KV[7, p] + 93.40532418362432 * KV[8, p] + -37.45832313645163 * KV[9, p] + 104.0996495089623 * KV[10, p] + 29.8402934266605 * KV[11, p] + -43.53345659001114 * KV[12, p] + 96.32455395918828 * KV[13, p] + -39.17726167561544 * KV[14, p] + -149.72683625798564 * KV[15, p])
 
 
+@kernel
+def _linear_orders(TX, W, G, MK, IM, nc, unit):
+    """Orders 1 and up of a linear line's series (see _taylor): each lane's
+    compression c_k into the work tiles and its force kappa c_k into G (one row, so
+    that the pass over the balls, _series_terms, reads neighbours with no branch)."""
+    nf = nc // SERIES_TILE
+    for k in range(1, 25):
+        for t in range(nf):
+            b = t * SERIES_TILE
+            c = t * TILE_STRIDE + k * SERIES_TILE
+            x0 = TX[k, b + 0]
+            x1 = TX[k, b + 1]
+            x2 = TX[k, b + 2]
+            x3 = TX[k, b + 3]
+            x4 = TX[k, b + 4]
+            x5 = TX[k, b + 5]
+            x6 = TX[k, b + 6]
+            x7 = TX[k, b + 7]
+            x8 = TX[k, b + 8]
+            x9 = TX[k, b + 9]
+            x10 = TX[k, b + 10]
+            x11 = TX[k, b + 11]
+            x12 = TX[k, b + 12]
+            x13 = TX[k, b + 13]
+            x14 = TX[k, b + 14]
+            x15 = TX[k, b + 15]
+            x16 = TX[k, b + 16]
+            m0 = MK[b + 0]
+            m1 = MK[b + 1]
+            m2 = MK[b + 2]
+            m3 = MK[b + 3]
+            m4 = MK[b + 4]
+            m5 = MK[b + 5]
+            m6 = MK[b + 6]
+            m7 = MK[b + 7]
+            m8 = MK[b + 8]
+            m9 = MK[b + 9]
+            m10 = MK[b + 10]
+            m11 = MK[b + 11]
+            m12 = MK[b + 12]
+            m13 = MK[b + 13]
+            m14 = MK[b + 14]
+            m15 = MK[b + 15]
+            d0 = x0 - x1
+            d1 = x1 - x2
+            d2 = x2 - x3
+            d3 = x3 - x4
+            d4 = x4 - x5
+            d5 = x5 - x6
+            d6 = x6 - x7
+            d7 = x7 - x8
+            d8 = x8 - x9
+            d9 = x9 - x10
+            d10 = x10 - x11
+            d11 = x11 - x12
+            d12 = x12 - x13
+            d13 = x13 - x14
+            d14 = x14 - x15
+            d15 = x15 - x16
+            W[c + 0] = d0
+            W[c + 1] = d1
+            W[c + 2] = d2
+            W[c + 3] = d3
+            W[c + 4] = d4
+            W[c + 5] = d5
+            W[c + 6] = d6
+            W[c + 7] = d7
+            W[c + 8] = d8
+            W[c + 9] = d9
+            W[c + 10] = d10
+            W[c + 11] = d11
+            W[c + 12] = d12
+            W[c + 13] = d13
+            W[c + 14] = d14
+            W[c + 15] = d15
+            G[b + 0] = d0 * m0
+            G[b + 1] = d1 * m1
+            G[b + 2] = d2 * m2
+            G[b + 3] = d3 * m3
+            G[b + 4] = d4 * m4
+            G[b + 5] = d5 * m5
+            G[b + 6] = d6 * m6
+            G[b + 7] = d7 * m7
+            G[b + 8] = d8 * m8
+            G[b + 9] = d9 * m9
+            G[b + 10] = d10 * m10
+            G[b + 11] = d11 * m11
+            G[b + 12] = d12 * m12
+            G[b + 13] = d13 * m13
+            G[b + 14] = d14 * m14
+            G[b + 15] = d15 * m15
+        for p in range(nf * SERIES_TILE, nc):
+            d = TX[k, p] - TX[k, p + 1]
+            W[_tw(p, k)] = d
+            G[p] = d * MK[p]
+        if k < 23:
+            _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)
+
+
 @kernel(fastmath={"contract"})
 def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from chainrun.solver._forces import _force, _rhs, _series_terms
+from chainrun.solver._forces import _force, _rhs
 from chainrun.solver._generated import (
-    _dense_ball, _dense_rows, _dense_stages, _error_norm, _series_orders,
+    _dense_ball, _dense_rows, _dense_stages, _error_norm, _linear_orders, _series_orders,
     _series_orders_mixed, _stages,
 )
 from chainrun.solver._jit import kernel
@@ -91,17 +91,7 @@ def _taylor(S):
         fr = W[_tw(p, f0)] if p < nc else 0.0
         TX[2, p] = 0.5 * (fl - fr) if unit else 0.5 * ((fl - fr) * IM[p] + GA[p])
     if mode == MODE_LINEAR:
-        # each order's forces go to a row of their own (XS, scratch between steps, as
-        # in _series_orders), so that the pass over the balls reads neighbours in one
-        # row, with no branch
-        G = S.XS
-        for k in range(1, PT + 1):
-            for p in range(nc):
-                c = TX[k, p] - TX[k, p + 1]
-                W[_tw(p, k)] = c
-                G[p] = c * MK[p]
-            if k < PT - 1:
-                _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)
+        _linear_orders(TX, W, S.XS, MK, IM, nc, unit)
     elif mode == MODE_MIXED:
         _series_orders_mixed(TX, W, S.XS, IM, AL, nc, m, unit)
     else:
@@ -177,19 +167,21 @@ def _series_impulse(S, lane, h):
 def _taylor_step(S, h):
     """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
 
-    Horner across the window, order by order (the balls' chains are independent).
+    Horner ball by ball, with the derivative's Horner beside it (v h + x, then
+    x h + T_k): the orders unroll and the balls' independent chains vectorise. Each
+    update has one product, which the compiler may fuse into a multiply-add or not, so
+    _taylor_end's evaluation of one ball is these numbers or within a rounding of them.
     """
     m = S.ints[I_M]
     T, X, V = S.TX, S.X, S.V
     for p in range(m):
-        X[p] = T[PT, p]
-        V[p] = PT * T[PT, p]
-    for k in range(PT - 1, 0, -1):
-        for p in range(m):
-            X[p] = X[p] * h + T[k, p]
-            V[p] = V[p] * h + k * T[k, p]
-    for p in range(m):
-        X[p] = X[p] * h + T[0, p]
+        v = T[PT, p]
+        x = v * h + T[PT - 1, p]
+        for k in range(PT - 2, -1, -1):
+            v = v * h + x
+            x = x * h + T[k, p]
+        X[p] = x
+        V[p] = v
     _rhs(S, X, V, S.A)
     S.fs[F_JSL] = _series_impulse(S, S.ints[I_LWL], h)
     S.fs[F_JSR] = _series_impulse(S, S.ints[I_RWL], h)
@@ -202,14 +194,14 @@ def _taylor_step(S, h):
 @kernel(fastmath={"contract"})
 def _taylor_end(S, p, h):
     """(x, v) of compact ball p at the series step's end h: _taylor_step's evaluation
-    of the window for one ball, with its fused multiply-adds, so the same bits."""
+    of the window for one ball (the same operations, each within a rounding)."""
     T = S.TX
-    x = T[PT, p]
-    v = PT * T[PT, p]
-    for k in range(PT - 1, 0, -1):
+    v = T[PT, p]
+    x = v * h + T[PT - 1, p]
+    for k in range(PT - 2, -1, -1):
+        v = v * h + x
         x = x * h + T[k, p]
-        v = v * h + k * T[k, p]
-    return x * h + T[0, p], v
+    return x, v
 
 
 @kernel(inline="always")
@@ -303,7 +295,7 @@ def _ball_end(S, b, th):
     """(x, v) of ball b at the start (th <= 0) or the end (th >= 1) of the last step,
     or at any th if it flies freely: no interpolant needed (inlined where it is hot).
     At the end of a series step whose window is not evaluated yet (I_XEND 0), from the
-    ball's series: the same operations as the window's evaluation, so the same bits."""
+    ball's series: the same operations as the window's evaluation."""
     p = S.bmap[b]
     if p >= 0:
         if th >= 1.0:
