@@ -166,6 +166,23 @@ class RunSpec:
             object.__setattr__(self, "_line", line)  # a cache, not a field
         return line
 
+    @property
+    def damped(self) -> bool:
+        """Whether the run's line may dissipate: a contact's or a wall's damping or
+        restitution is given (other than a damping of 0 or a restitution of 1). Read
+        from the settings, before the line is built: a damped line's state takes more
+        memory (``chainrun.limits``)."""
+        def given(settings):
+            if settings is None:
+                return False
+            return any(value is not None and not (isinstance(value, (int, float))
+                                                  and value == neutral)
+                       for value, neutral in ((settings.damping, 0.0),
+                                              (settings.restitution, 1.0)))
+        walls = self.walls
+        return given(self.chain) or (walls is not None
+                                     and (given(walls.left) or given(walls.right)))
+
 
 __all__ = [
     "Chain",

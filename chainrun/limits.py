@@ -44,9 +44,11 @@ __all__ = [
 #: int8, ``lvl`` float64, ``stamp`` int64: 17), N/2 clusters (``clo, chi, coff`` int64
 #: and ``cen`` float64: 16), and the balls' and contacts' parameters (``bp``: 3 x 8,
 #: ``cp``: 5 x 8; 9 x 8 on a damped line) with the sealed collisions' closed forms
-#: (``sl``: 6 x 8; 11 x 8 on a damped line, whose 72 more bytes per ball are not
-#: counted).
+#: (``sl``: 6 x 8).
 STATE_BYTES_PER_BALL = 9 * 8 + 9 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8 + 6 * 8
+#: Bytes per ball more on a damped line: ``cp`` has 9 rows (4 x 8 more: damping, its
+#: exponent, the held state and the energy dissipated) and ``sl`` 11 (5 x 8 more).
+DAMPED_BYTES_PER_BALL = 4 * 8 + 5 * 8
 #: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages and 2 rows of a damped
 #: line's x 8), ``FX, FV`` (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work
@@ -79,7 +81,8 @@ def human_size(nbytes: float) -> str:
     raise AssertionError  # not reached
 
 
-def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = False) -> int:
+def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = False,
+                        damped: bool = False) -> int:
     """Bytes of memory one run of ``n`` balls and ``n_snapshots`` snapshots needs.
 
     Parameters
@@ -92,6 +95,8 @@ def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = Fals
         Whether the snapshots stay in memory (``chainrun.solver.simulate`` without an
         ``on_snapshot`` observer): then add ``2 * T * N`` float64. The runner streams
         them to the run file, so it does not.
+    damped : bool
+        Whether the line dissipates (``RunSpec.damped``): its state is larger.
 
     Returns
     -------
@@ -103,7 +108,8 @@ def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = Fals
     t = max(int(n_snapshots), 0)
     window = min(n, max(WINDOW_MIN, 4 * math.isqrt(n)))
     total = (
-        n * (STATE_BYTES_PER_BALL + OUTPUT_BYTES_PER_BALL)
+        n * (STATE_BYTES_PER_BALL + OUTPUT_BYTES_PER_BALL
+             + (DAMPED_BYTES_PER_BALL if damped else 0))
         + window * WINDOW_BYTES_PER_BALL * 3 // 2  # the old window is freed after growing
         + t * BYTES_PER_TIME
         + FIXED_BYTES
@@ -147,7 +153,7 @@ def memory_available() -> int | None:
 
 
 def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
-                 runs_at_once: int = 1) -> int:
+                 runs_at_once: int = 1, damped: bool = False) -> int:
     """Refuse a run that would not fit in memory.
 
     Parameters
@@ -159,6 +165,8 @@ def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
         nothing is refused.
     runs_at_once : int
         Runs of this size computed at once on this machine (``--jobs``).
+    damped : bool
+        Whether the line dissipates (its state is larger).
 
     Returns
     -------
@@ -170,7 +178,7 @@ def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
     ChainrunError
         One line with the estimate and the memory available.
     """
-    need = estimate_run_memory(n, n_snapshots)
+    need = estimate_run_memory(n, n_snapshots, damped=damped)
     if available is None:
         available = memory_available()
     together = need * max(int(runs_at_once), 1)
@@ -239,7 +247,7 @@ def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = 
     Parameters
     ----------
     specs : list of RunSpec
-        The runs to compute (``n`` and ``times`` are used).
+        The runs to compute (``n``, ``times`` and ``damped`` are used).
     folder : path
         The output folder.
     runs_at_once : int
@@ -248,10 +256,11 @@ def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = 
     specs = list(specs)
     if not specs:
         return []
-    sizes = [(int(s.n), len(s.times)) for s in specs]
-    biggest = max(sizes, key=lambda nt: estimate_run_memory(*nt))
-    check_memory(*biggest, available=available,
+    sizes = [(int(s.n), len(s.times), s.damped) for s in specs]
+    n, t, damped = max(sizes, key=lambda ntd: estimate_run_memory(ntd[0], ntd[1],
+                                                                  damped=ntd[2]))
+    check_memory(n, t, available=available, damped=damped,
                  runs_at_once=min(max(int(runs_at_once), 1), len(specs)))
-    total = sum(estimate_file_size(n, t) for n, t in sizes)
+    total = sum(estimate_file_size(n, t) for n, t, _ in sizes)
     warning = _disk_warning(total, len(specs), folder, free)
     return [] if warning is None else [warning]

@@ -198,7 +198,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     from chainrun.solver import load_kernels, simulate_line, velocity_floor
     from chainrun.store import RunWriter
 
-    check_memory(spec.n, len(spec.times))
+    check_memory(spec.n, len(spec.times), damped=spec.damped)
     line = spec.line  # built here, on the worker: as long as the line (ConfigError if wrong)
     # numba loads the kernels on their first call; the run's wall time is its solve's
     load_kernels()

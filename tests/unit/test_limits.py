@@ -49,6 +49,46 @@ def test_the_bytes_per_ball_are_the_solvers_own():
     assert window == limits.WINDOW_BYTES_PER_BALL
 
 
+def test_a_damped_lines_bytes_per_ball_are_the_solvers_own():
+    """A damped line's state holds more per ball (the damping's rows of the contacts'
+    parameters and of the sealed collisions' closed forms): what the estimate adds."""
+    from chainrun.solver import Line, _driver
+
+    def damped_bytes(n):
+        line = Line.make(n, k=1, alpha=1.5, damping=0.1, damping_exponent=0.5)
+        state = _driver._line_state(_driver._Prepared(line), 1e-12, None, None)
+        return sum(a.nbytes for a in state if isinstance(a, np.ndarray))
+
+    small, large = 10_000, 20_000
+    more = ((damped_bytes(large) - damped_bytes(small))
+            - (state_bytes(large) - state_bytes(small))) / (large - small)
+    assert more == limits.DAMPED_BYTES_PER_BALL
+    n = 10**6
+    assert (limits.estimate_run_memory(n, 10, damped=True)
+            - limits.estimate_run_memory(n, 10)) == n * limits.DAMPED_BYTES_PER_BALL
+
+
+@pytest.mark.parametrize(("keys", "damped"), [
+    ("", False),
+    ("damping = 0.0\n", False),
+    ("damping = 0.1\ndamping_exponent = 0.5\n", True),
+    ('restitution = 0.9\ndamping_law = "tsuji"\n', True),
+    ('restitution = 1.0\ndamping_law = "tsuji"\n', False),
+    ('damping = {random = "uniform", low = 0.0, high = 0.1, seed = 1}\n', True),
+    ('[walls.right]\nstiffness = 1.0\nrestitution = 0.8\ndamping_law = "tsuji"\n', True),
+    ("[walls.left]\nstiffness = 1.0\n", False),
+])
+def test_a_run_says_whether_its_line_may_dissipate(keys, damped):
+    """Read from the settings before the line is built, for the memory estimate; a
+    value that may dissipate counts, as a generated one does."""
+    text = 'name = "x"\n[chain]\nn = 10\nk = 1\nalpha = 1.5\n' + keys
+    if "[walls" in keys:
+        text += "[solver]\nt_end = 10.0\n"
+    (spec,) = parse_experiment(text, "toml").runs()
+    assert spec.damped is damped
+    assert spec.line.is_damped is damped
+
+
 def test_the_estimate_grows_with_n_and_not_with_snapshots_times_n():
     small = limits.estimate_run_memory(10**6, 10)
     assert limits.estimate_run_memory(10**7, 10) > 9 * (small - limits.FIXED_BYTES)
