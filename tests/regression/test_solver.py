@@ -384,7 +384,10 @@ def _window_rhs(S, alpha):
 ])
 def test_series_against_an_independent_integration(n, k, alpha, t_end):
     """The Taylor series of a mid-run window, taken as long a step as it allows, lands
-    where scipy's DOP853 at its tightest tolerance does on the same clusters' equations."""
+    where scipy's DOP853 at its tightest tolerance does on the same clusters' equations;
+    and the end of each ball, as the event scan reads it from the ball's own series
+    before the window is evaluated (_taylor_end), is the window's evaluation to a
+    rounding (the compiler may fuse a multiply-add in one and not the other)."""
     from scipy.integrate import solve_ivp
 
     from chainrun.solver import _loop, _state, _steppers
@@ -397,6 +400,14 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
     assert 0.0 < h < np.inf
     S.ints[_state.I_TAY] = 1
     assert twin(_steppers._step)(S, h) <= 1.0
+    ends = np.array([twin(_steppers._taylor_end)(S, p, h) for p in range(m)])
+    # Horner's rounding bound: the order times eps times the sum of the terms' sizes
+    order = np.arange(_state.PT + 1)[:, None]
+    terms = np.abs(S.TX[:, :m])
+    sizes = ((terms * h ** order).sum(axis=0),
+             (order[1:] * terms[1:] * h ** (order[1:] - 1)).sum(axis=0))
+    for got, window, size in zip(ends.T, (S.X[:m], S.V[:m]), sizes):
+        assert np.all(np.abs(got - window) <= 2 * _state.PT * np.finfo(float).eps * size)
     y0 = np.concatenate([S.X0[:m], S.V0[:m]])
     sol = solve_ivp(_window_rhs(S, alpha), (0.0, h), y0, method="DOP853",
                     rtol=1e-13, atol=1e-15)
@@ -411,35 +422,6 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
         assert abs(x - half[p]) < 1e-11 and abs(v - half[m + p]) < 1e-11
 
 
-
-@pytest.mark.slow  # the Python twins of the series kernels compile first (~25 s)
-@pytest.mark.parametrize(("n", "k", "alpha", "t_end"), [
-    (60, 3, 1.5, 20.0), (80, 20, 1.0, 30.0), (40, 2, 2.3, 12.0),
-])
-def test_series_end_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
-    """The event scan reads a ball's end of a series step from its own series
-    (_taylor_end) before the window is evaluated: the window's evaluation, ball by
-    ball, to a rounding (the compiler may fuse a multiply-add in one and not the
-    other)."""
-    from chainrun.solver import _loop, _state, _steppers
-
-    S = _stopped_state(n, k, alpha, t_end)
-    m = int(S.ints[_state.I_M])
-    assert m > 0 and S.ints[_state.I_JUMP] == 0
-    twin(_loop._save_start)(S)
-    h = twin(_steppers._taylor)(S)
-    assert 0.0 < h < np.inf
-    S.ints[_state.I_TAY] = 1
-    for step in (h, 0.3 * h):
-        twin(_steppers._step)(S, step)
-        ends = np.array([twin(_steppers._taylor_end)(S, p, step) for p in range(m)])
-        # Horner's rounding bound: the order times eps times the sum of the terms' sizes
-        order = np.arange(_state.PT + 1)[:, None]
-        terms = np.abs(S.TX[:, :m])
-        sizes = ((terms * step ** order).sum(axis=0),
-                 (order[1:] * terms[1:] * step ** (order[1:] - 1)).sum(axis=0))
-        for got, window, size in zip(ends.T, (S.X[:m], S.V[:m]), sizes):
-            assert np.all(np.abs(got - window) <= 2 * _state.PT * np.finfo(float).eps * size)
 
 def test_bernstein_range_holds_the_polynomial():
     """The bounds the event search trusts to skip a contact contain the polynomial."""
