@@ -6,9 +6,10 @@ alone (see ``_nystrom``). Written as loops over the tableau, a window of a dozen
 spends its time in loop overhead; written out with the coefficients as literals, each
 stage is one pass over the balls. The Taylor series' sums (``_series_orders``) loop
 over orders with a tile's lanes written out, as does a linear line's
-(``_linear_orders``), and its bounds (``_series_bounds``) are written out whole. The coefficients are computed exactly
-(``_exact_product``), so the text is the same on every machine. This script writes
-the whole of ``_generated.py`` from scipy's DOP853 tableau and the series' orders::
+(``_linear_orders``), and its bounds (``_series_bounds``) are written out whole. The
+coefficients are computed exactly (``_exact_product``), so the text is the same on
+every machine. This script writes the whole of ``_generated.py`` from scipy's DOP853
+tableau and the series' orders::
 
     python -m chainrun.solver._codegen          # rewrite _generated.py
     python -m chainrun.solver._codegen --check  # exit 1 if it is out of date
