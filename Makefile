@@ -94,9 +94,13 @@ $(RESULTS)/analysis/%.h5: $(ANALYSIS_SOURCES) | $(STAMP)
 # The artefacts build JOBS at a time, independent experiments side by side (each
 # simulate on JOBS workers as well): most of a run's time is its process starting, so
 # two at once on two cores take about half as long. A make of its own, so that plain
-# `make figures` runs them so; each one's output is shown whole when it is done.
+# `make figures` runs them so; each one's output is shown whole when it is done (where
+# make can: GNU make 4 or later).
+SUBMAKE := $(MAKE) --no-print-directory -j$(JOBS) \
+           $(if $(filter output-sync,$(.FEATURES)),--output-sync=target)
+
 figures: $(STAMP)
-	$(MAKE) --no-print-directory -j$(JOBS) --output-sync=target figure-outputs
+	$(SUBMAKE) figure-outputs
 
 .PHONY: figure-outputs gallery-outputs
 figure-outputs: $(ARTEFACT_OUTPUTS)
@@ -106,7 +110,7 @@ figure-outputs: $(ARTEFACT_OUTPUTS)
 # analyses $(RESULTS)/analysis/gallery-*.h5, figures $(RESULTS)/gallery/*.png and .pdf,
 # and $(RESULTS)/gallery-comparison.md, .csv. The registry is GALLERY in chainrun/artefacts.py.
 gallery: $(STAMP)
-	$(MAKE) --no-print-directory -j$(JOBS) --output-sync=target gallery-outputs
+	$(SUBMAKE) gallery-outputs
 
 gallery-outputs: $(GALLERY_OUTPUTS)
 
