@@ -422,7 +422,6 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
         assert abs(x - half[p]) < 1e-11 and abs(v - half[m + p]) < 1e-11
 
 
-
 def test_bernstein_range_holds_the_polynomial():
     """The bounds the event search trusts to skip a contact contain the polynomial."""
     from chainrun.solver import _compression, _state
