@@ -16,17 +16,22 @@ help:
 	@echo "make gallery  the published experiments beyond the paper (docs/gallery/) into results/"
 
 # The packages install with uv, which fetches them side by side (about 5 s from nothing,
-# against 26 s for pip alone); where uv cannot be installed, pip does it. The solver is
-# then compiled for this machine once, here, into its cache (about 75 s on two cores):
-# a first `chainrun simulate` then starts at once. The compiler keeps one core busy;
-# the test tools install on the other meanwhile (the extras' packages alone, so that
-# the package the compiler imports is not reinstalled under it).
-$(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet uv || $(BIN)/python -m pip install --quiet --upgrade pip
-	install="$(BIN)/python -m pip install --quiet"; \
+# against 26 s for pip alone); where uv cannot be installed, pip does it. VENV_MADE
+# makes the environment and gets its installer; INSTALLER sets the shell's $install to
+# the command that installs (each recipe line is a shell of its own).
+VENV_MADE = test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
+	  $(BIN)/python -m pip install --quiet uv || $(BIN)/python -m pip install --quiet --upgrade pip
+INSTALLER = install="$(BIN)/python -m pip install --quiet"; \
 	  if $(BIN)/python -m uv --version > /dev/null 2>&1; then \
-	    install="$(BIN)/python -m uv pip install --quiet --python $(BIN)/python"; fi; \
+	    install="$(BIN)/python -m uv pip install --quiet --python $(BIN)/python"; fi
+
+# The solver is compiled for this machine once, here, into its cache (about 75 s on two
+# cores): a first `chainrun simulate` then starts at once. The compiler keeps one core
+# busy; the test tools install on the other meanwhile (the extras' packages alone, so
+# that the package the compiler imports is not reinstalled under it).
+$(STAMP): pyproject.toml
+	$(VENV_MADE)
+	$(INSTALLER); \
 	  $$install -e . || exit 1; \
 	  $(BIN)/python -c 'import chainrun.solver as s; s.load_kernels()' & compiler=$$!; \
 	  $(BIN)/python -c 'import subprocess, sys, tomllib; \
@@ -46,11 +51,11 @@ BENCH_STAMP := $(VENV)/.chainrun-bench-installed
 BENCH_ARGS  ?=
 
 $(BENCH_STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[bench]' || { \
+	$(VENV_MADE)
+	$(INSTALLER); \
+	  $$install -e '.[bench]' || { \
 	  echo "make bench: the bench extra (heyoka) could not be installed; its peer is skipped"; \
-	  $(BIN)/python -m pip install --quiet -e .; }
+	  $$install -e .; }
 	touch $@
 
 .PHONY: bench
