@@ -64,7 +64,7 @@ def main(argv=None) -> int:
           + (f", damping {args.damping:g}, exponent {args.damping_exponent:g}"
              if args.damping else ""))
     print(f"{'run':<22} {'s':>8} {'terminal t':>12} {'events':>9} {'closed form':>12}"
-          f" {'steps':>9} {'window':>7}")
+          f" {'steps':>9} {'rejected':>9} {'window':>7}")
     for name, kw in (("closed form", dict(rtol=rtol)),
                      ("integrated", dict(rtol=rtol, closed_form=False)),
                      ("integrated, rtol/10", dict(rtol=rtol / 10, closed_form=False))):
@@ -74,7 +74,8 @@ def main(argv=None) -> int:
         d = sol.diagnostics
         runs[name] = sol.final_velocity
         print(f"{name:<22} {dt:8.2f} {sol.end_time:12.4g} {d.events:9d}"
-              f" {d.closed_form_collisions:12d} {d.steps:9d} {d.max_window:7d}")
+              f" {d.closed_form_collisions:12d} {d.steps:9d} {d.rejected_steps:9d}"
+              f" {d.max_window:7d}")
     print(f"\n{'final velocities':<44} {'max |dv|':>10} {'median':>10}")
     names = list(runs)
     for i, a in enumerate(names):
