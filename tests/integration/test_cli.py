@@ -165,6 +165,27 @@ def test_simulate_imports_only_what_a_run_needs(tmp_path):
     assert solver_time and float(solver_time.group(1)) < 0.1, done.stderr
 
 
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir() or (os.cpu_count() or 1) < 2,
+                    reason="threads are counted in /proc, on two cores or more")
+def test_the_command_starts_no_blas_threads(tmp_path):
+    # numpy's and scipy's OpenBLAS start a thread per further core when imported, which
+    # spin and take CPU from the runs beside this one; the command keeps them out, and a
+    # setting of the user's stands
+    code = ("import os\nimport chainrun.cli\nimport numpy, scipy.linalg\n"
+            "print(os.environ['OPENBLAS_NUM_THREADS'], len(os.listdir('/proc/self/task')))")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+
+    def run(**extra):
+        done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                              text=True, check=True, env={**env, **extra})
+        setting, threads = done.stdout.split()
+        return setting, int(threads)
+
+    assert run() == ("1", 1)
+    setting, threads = run(OPENBLAS_NUM_THREADS="2")
+    assert setting == "2" and threads > 1
+
+
 def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
     # numba loads the kernels on their first call: a run must not pay for it in its time
     import chainrun.solver as solver
