@@ -48,7 +48,6 @@ import json
 import math
 import os
 import re
-import reprlib
 import sys
 import tomllib
 from collections.abc import Mapping
@@ -71,7 +70,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from chainrun import generators
-from chainrun.errors import ConfigError
+from chainrun.errors import ConfigError, one_line, show_value
 from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
 from chainrun.solver import DEFAULT_RTOL, Line, Wall
@@ -162,7 +161,7 @@ class RunSpec:
                     line = build_line(self.chain, self.walls or Walls(), self.units)
                 except LineError as exc:
                     raise ConfigError(self.experiment, [
-                        _one_line(f"run {self.run_id}: {p.line()}") for p in exc.problems]) from None
+                        one_line(f"run {self.run_id}: {p.line()}") for p in exc.problems]) from None
             object.__setattr__(self, "_line", line)  # a cache, not a field
         return line
 
@@ -299,44 +298,10 @@ def _fail(issues: list[_Issue]) -> PydanticCustomError:
     )
 
 
-_REPR = reprlib.Repr()  # bounded: YAML aliases can build huge or cyclic structures
-_REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, 60, 60
-_REPR.maxlist = _REPR.maxtuple = _REPR.maxset = _REPR.maxdict = 8
-
-
-def _show(value: Any) -> str:
-    """A short one-line rendering of a user's value for a message.
-
-    Bounded in time and length whatever the value: containers are shown a few
-    levels and items deep, and integers too long to print by their size.
-    """
-    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 190:
-        digits = int((value.bit_length() - 1) * math.log10(2)) + 1
-        text = f"{'-' if value < 0 else ''}<an integer of about {digits} digits>"
-    elif isinstance(value, (str, bytes, int, float, type(None))):
-        text = repr(value)
-    else:
-        try:
-            text = _REPR.repr(value)
-        except (RecursionError, ValueError):
-            text = f"<{type(value).__name__}>"
-    text = _one_line(text)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-#: Characters that end a line for ``str.splitlines``, and the other control characters.
-_BREAKS = {c: repr(chr(c))[1:-1] for c in [*range(0x20), *range(0x7F, 0xA0), 0x2028, 0x2029]}
-
-
-def _one_line(text: str) -> str:
-    """``text`` with line breaks and control characters written as escapes."""
-    return text.translate(_BREAKS)
-
-
 def _key_text(key: Any) -> str:
     """A user's key for a message: one line, at most 60 characters."""
     if not isinstance(key, str):
-        return _show(key)
+        return show_value(key)
     text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in key[:200])
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -361,8 +326,8 @@ def _check_int(value: Any) -> int:
     if isinstance(value, int) and not isinstance(value, bool):
         if -MAX_INT - 1 <= value <= MAX_INT:
             return value
-        raise _fail([_Issue(f"must be a 64-bit integer (at most 2**63 - 1), got {_show(value)}")])
-    raise _fail([_Issue(f"expected an integer, got {_show(value)}")])
+        raise _fail([_Issue(f"must be a 64-bit integer (at most 2**63 - 1), got {show_value(value)}")])
+    raise _fail([_Issue(f"expected an integer, got {show_value(value)}")])
 
 
 def _check_float(value: Any) -> float:
@@ -371,10 +336,10 @@ def _check_float(value: Any) -> float:
         try:
             x = float(value)
         except OverflowError:  # an integer beyond 1.8e308
-            raise _fail([_Issue(f"must be finite, got {_show(value)}")]) from None
+            raise _fail([_Issue(f"must be finite, got {show_value(value)}")]) from None
         if math.isfinite(x):
             return x
-        raise _fail([_Issue(f"must be finite, got {_show(value)}")])
+        raise _fail([_Issue(f"must be finite, got {show_value(value)}")])
     hint = ""
     if isinstance(value, str):
         try:
@@ -382,13 +347,13 @@ def _check_float(value: Any) -> float:
             hint = " (text, not a number; YAML reads 1e-12 as text: write 1.0e-12)"
         except ValueError:
             pass
-    raise _fail([_Issue(f"expected a number, got {_show(value)}{hint}")])
+    raise _fail([_Issue(f"expected a number, got {show_value(value)}{hint}")])
 
 
 def _check_str(value: Any) -> str:
     if isinstance(value, str):
         return value
-    raise _fail([_Issue(f"expected a string, got {_show(value)}")])
+    raise _fail([_Issue(f"expected a string, got {show_value(value)}")])
 
 
 def _none_or(check):
@@ -456,14 +421,14 @@ def _values(key: str, text: bool = False):
         if text:
             name = _check_str(value)
             if name not in MATERIALS:
-                raise _fail([_Issue(f"unknown material {_show(name)}"
+                raise _fail([_Issue(f"unknown material {show_value(name)}"
                                     f"{_suggest(name, list(MATERIALS))} (known: "
                                     f"{', '.join(MATERIALS)})")])
             return name
         x = _check_float(value)
         reason = _rule_reason(key, x)
         if reason:
-            raise _fail([_Issue(f"{reason}, got {_show(value)}")])
+            raise _fail([_Issue(f"{reason}, got {show_value(value)}")])
         return x
 
     return BeforeValidator(check)
@@ -482,7 +447,7 @@ def _check_damping_law(value: Any) -> str | None:
         return None
     name = _check_str(value)
     if name not in collision.LAWS:
-        raise _fail([_Issue(f"unknown damping law {_show(name)}"
+        raise _fail([_Issue(f"unknown damping law {show_value(name)}"
                             f"{_suggest(name, list(collision.LAWS))} (known: "
                             f"{', '.join(collision.LAWS)})")])
     return name
@@ -629,7 +594,7 @@ class WallSettings(BaseModel):
             return None
         name = _check_str(value)
         if name not in MATERIALS:
-            raise _fail([_Issue(f"unknown material {_show(name)}{_suggest(name, list(MATERIALS))}"
+            raise _fail([_Issue(f"unknown material {show_value(name)}{_suggest(name, list(MATERIALS))}"
                                 f" (known: {', '.join(MATERIALS)})")])
         return name
 
@@ -688,7 +653,7 @@ def _expanded(chain: Chain, key: str, size: int, problems: list["_Problem"],
         if unknown:
             i = unknown[0]
             problems.append(_Problem(f"{prefix}.{key}[{i}]", f"unknown material "
-                                     f"{_show(a[i])} (known: {', '.join(MATERIALS)})"))
+                                     f"{show_value(a[i])} (known: {', '.join(MATERIALS)})"))
             return None
         return a
     bad = ~np.isfinite(a)
@@ -702,7 +667,7 @@ def _expanded(chain: Chain, key: str, size: int, problems: list["_Problem"],
         i = int(np.flatnonzero(bad)[0])
         x = float(a[i])
         reason = "must be finite" if not math.isfinite(x) else _rule_reason(key, x)
-        problems.append(_Problem(f"{prefix}.{key}[{i}]", f"{reason}, got {_show(x)}"))
+        problems.append(_Problem(f"{prefix}.{key}[{i}]", f"{reason}, got {show_value(x)}"))
         return None
     return a
 
@@ -989,7 +954,7 @@ class Output(BaseModel):
     @classmethod
     def _sensors(cls, value: Any) -> tuple[int, ...]:
         if not isinstance(value, (list, tuple)):
-            raise _fail([_Issue(f"expected a list of ball numbers, got {_show(value)}")])
+            raise _fail([_Issue(f"expected a list of ball numbers, got {show_value(value)}")])
         issues: list[_Issue] = []
         balls: list[int] = []
         for position, item in enumerate(value):
@@ -1028,7 +993,7 @@ class Output(BaseModel):
             return times
         if not isinstance(value, (list, tuple)):
             raise _fail(
-                [_Issue(f"expected a list of times or a table {{start, stop, step}}, got {_show(value)}")]
+                [_Issue(f"expected a list of times or a table {{start, stop, step}}, got {show_value(value)}")]
             )
         issues: list[_Issue] = []
         times: list[float] = []
@@ -1090,7 +1055,7 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
     if value is None:
         return {}, set(), []
     if not isinstance(value, Mapping):
-        return {}, set(), [_Issue(f"expected a table, got {_show(value)}")]
+        return {}, set(), [_Issue(f"expected a table, got {show_value(value)}")]
     valid: dict[str, tuple[Any, ...]] = {}
     named: set[str] = set()
     issues: list[_Issue] = []
@@ -1105,7 +1070,7 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
             continue
         named.add(key)
         if not isinstance(values, (list, tuple)):
-            issues.append(_Issue(f"expected a list of values, got {_show(values)}", sub))
+            issues.append(_Issue(f"expected a list of values, got {show_value(values)}", sub))
             continue
         if not values:
             issues.append(_Issue("must list at least one value", sub))
@@ -1227,14 +1192,14 @@ class Experiment(BaseModel):
                 [
                     _Issue(
                         "must be a folder name of 1-100 letters, digits, '.', '_' or '-', "
-                        f"not starting with '.', got {_show(value)}"
+                        f"not starting with '.', got {show_value(value)}"
                     )
                 ]
             )
         if value.endswith("."):  # Windows drops it: "x." and "x" are one folder there
-            raise _fail([_Issue(f"must not end with '.', got {_show(value)}")])
+            raise _fail([_Issue(f"must not end with '.', got {show_value(value)}")])
         if _RESERVED_RE.fullmatch(value):
-            raise _fail([_Issue(f"is a device name reserved on Windows, got {_show(value)}")])
+            raise _fail([_Issue(f"is a device name reserved on Windows, got {show_value(value)}")])
         return value
 
     @field_validator("description", mode="before")
@@ -1248,7 +1213,7 @@ class Experiment(BaseModel):
         value = _check_str(value)
         if value not in UNITS:
             raise _fail([_Issue(f"expected one of {', '.join(map(repr, UNITS))}, got "
-                                f"{_show(value)}{_suggest(value, list(UNITS))}")])
+                                f"{show_value(value)}{_suggest(value, list(UNITS))}")])
         return value
 
     @field_validator("output", "solver", "walls", mode="before")
@@ -1348,7 +1313,7 @@ class Experiment(BaseModel):
                     problems += _needs_t_end(chain, walls, solver.t_end)
             if problems:
                 label = f"sweep ({_label(overrides)}): " if overrides else ""
-                lines = [_one_line(f"{label}{p.line()}") for p in problems]
+                lines = [one_line(f"{label}{p.line()}") for p in problems]
                 raise ConfigError(self._source or self.name, lines)
             config = {**data, "chain": chain.model_dump(exclude_none=True),
                       "solver": solver.model_dump()}
@@ -1476,11 +1441,11 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
             reason = f"unknown key{_suggest(loc[-1], choices)}"
         elif kind == "invalid_key":
             key = ".".join(loc[:-1]) or "top level"
-            reason = f"unknown key {_show(error['loc'][-1])} (keys must be text)"
+            reason = f"unknown key {show_value(error['loc'][-1])} (keys must be text)"
         elif kind in ("model_type", "dict_type", "model_attributes_type"):
-            reason = f"expected a table, got {_show(value)}"
+            reason = f"expected a table, got {show_value(value)}"
         elif kind == "string_type":
-            reason = f"expected a string, got {_show(value)}"
+            reason = f"expected a string, got {show_value(value)}"
         elif kind in ("greater_than_equal", "greater_than", "less_than_equal", "less_than"):
             op, bound = {
                 "greater_than_equal": (">=", "ge"),
@@ -1488,9 +1453,9 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
                 "less_than_equal": ("<=", "le"),
                 "less_than": ("<", "lt"),
             }[kind]
-            reason = f"must be {op} {_bound(ctx[bound])}, got {_show(value)}"
+            reason = f"must be {op} {_bound(ctx[bound])}, got {show_value(value)}"
         else:  # not expected from this schema; pydantic's msg is one line
-            reason = f"{error['msg']}, got {_show(value)}"
+            reason = f"{error['msg']}, got {show_value(value)}"
         problems.append(_Problem(key, reason))
     return problems
 
@@ -1534,7 +1499,7 @@ def _validate(data: Any, source: str) -> Experiment:
     named by it, e.g. ``sweep (n=3, k=4): chain.k: must be <= chain.n (3), got 4``.
     """
     if not isinstance(data, Mapping):
-        got = "an empty file" if data is None else f"{type(data).__name__} {_show(data)}"
+        got = "an empty file" if data is None else f"{type(data).__name__} {show_value(data)}"
         raise ConfigError(source, [f"top level: expected a table of keys, got {got}"])
     # data files named by the experiment are relative to its folder
     context = {"base_dir": os.path.dirname(os.path.abspath(source))}
@@ -1633,7 +1598,7 @@ def _validate(data: Any, source: str) -> Experiment:
     lines += size_lines
     lines += combo_lines
     if lines:
-        raise ConfigError(source, [_one_line(line) for line in lines])
+        raise ConfigError(source, [one_line(line) for line in lines])
     assert first is not None
     return Experiment.model_validate({**first, "sweep": data.get("sweep")}, context=context)
 
@@ -1724,7 +1689,7 @@ def _yaml():
             try:
                 return super().construct_object(node, deep=deep)
             except (ValueError, TypeError, OverflowError) as exc:
-                value = f"{_show(node.value)}: " if isinstance(node.value, str) else ""
+                value = f"{show_value(node.value)}: " if isinstance(node.value, str) else ""
                 raise yaml.constructor.ConstructorError(
                     None, None, f"cannot read {value}{_value_error(exc)}", node.start_mark
                 ) from None
@@ -1768,11 +1733,11 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
     try:
         data = load(text)
     except syntax_error as exc:
-        raise ConfigError(source, [_one_line(_syntax_line(exc, text, fmt))]) from None
+        raise ConfigError(source, [one_line(_syntax_line(exc, text, fmt))]) from None
     except RecursionError:
         raise ConfigError(source, ["nested too deeply to read"]) from None
     except ValueError as exc:  # tomllib converting a value, e.g. an integer of 5000 digits
-        raise ConfigError(source, [_one_line(f"cannot read a value ({_value_error(exc)})")]) from None
+        raise ConfigError(source, [one_line(f"cannot read a value ({_value_error(exc)})")]) from None
     try:
         experiment = _validate(data, source)
     except RecursionError:  # YAML aliases can nest without end

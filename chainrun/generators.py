@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from chainrun.errors import show_value
+
 __all__ = ["BASES", "Values", "ValuesError", "check", "expand", "is_uniform"]
 
 #: The base of a generator table and the keys each takes (besides ``impurity``).
@@ -89,11 +91,6 @@ class Values:
         return self.items is None and self.table is None
 
 
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
 def _number(value: Any, sub: tuple[str, ...]) -> float:
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         try:
@@ -102,25 +99,25 @@ def _number(value: Any, sub: tuple[str, ...]) -> float:
             x = math.inf
         if math.isfinite(x):
             return x
-        raise ValuesError(f"must be finite, got {_show(value)}", sub)
-    raise ValuesError(f"expected a number, got {_show(value)}", sub)
+        raise ValuesError(f"must be finite, got {show_value(value)}", sub)
+    raise ValuesError(f"expected a number, got {show_value(value)}", sub)
 
 
 def _text(value: Any, sub: tuple[str, ...]) -> str:
     if isinstance(value, str):
         return value
-    raise ValuesError(f"expected a string, got {_show(value)}", sub)
+    raise ValuesError(f"expected a string, got {show_value(value)}", sub)
 
 
 def _int(value: Any, sub: tuple[str, ...], low: int) -> int:
     if isinstance(value, int) and not isinstance(value, bool) and low <= value < 2**63:
         return value
-    raise ValuesError(f"expected an integer >= {low}, got {_show(value)}", sub)
+    raise ValuesError(f"expected an integer >= {low}, got {show_value(value)}", sub)
 
 
 def _list(value: Any, sub: tuple[str, ...], item) -> list:
     if not isinstance(value, (list, tuple)) or not value:
-        raise ValuesError(f"expected a non-empty list, got {_show(value)}", sub)
+        raise ValuesError(f"expected a non-empty list, got {show_value(value)}", sub)
     if len(value) > MAX_LIST:
         raise ValuesError(f"a list of {len(value)} values is too long (at most {MAX_LIST}; "
                           f"use a file)", sub)
@@ -162,7 +159,7 @@ def _impurities(value: Any, text: bool) -> list[dict]:
     for i, table in enumerate(tables):
         sub = ("impurity",) if not isinstance(value, (list, tuple)) else (f"impurity[{i}]",)
         if not isinstance(table, Mapping):
-            raise ValuesError(f"expected a table {{at, value}}, got {_show(table)}", sub)
+            raise ValuesError(f"expected a table {{at, value}}, got {show_value(table)}", sub)
         for key in table:
             if key not in ("at", "value"):
                 raise ValuesError("unknown key (expected 'at' and 'value')", sub + (str(key),))
@@ -200,9 +197,9 @@ def check(value: Any, *, text: bool = False, base_dir: str = ".") -> Values:
     if isinstance(value, (list, tuple)):
         return Values(items=tuple(_list(value, (), lambda v, s: item(v, s))))
     if text and not isinstance(value, str):
-        raise ValuesError(f"expected a string, a list or a table, got {_show(value)}")
+        raise ValuesError(f"expected a string, a list or a table, got {show_value(value)}")
     if not text and not (isinstance(value, (int, float)) and not isinstance(value, bool)):
-        raise ValuesError(f"expected a number, a list or a table, got {_show(value)}")
+        raise ValuesError(f"expected a number, a list or a table, got {show_value(value)}")
     return Values(scalar=item(value, ()))
 
 
@@ -237,7 +234,7 @@ def _check_table(table: Mapping, text: bool, base_dir: str) -> dict:
         kind = table["random"]
         if kind not in RANDOM:
             raise ValuesError(f"expected one of {', '.join(map(repr, RANDOM))}, got "
-                              f"{_show(kind)}", ("random",))
+                              f"{show_value(kind)}", ("random",))
         out["random"] = kind
         if "seed" not in table:
             raise ValuesError("required (the same seed gives the same values)", ("seed",))
@@ -269,7 +266,7 @@ def _check_table(table: Mapping, text: bool, base_dir: str) -> dict:
             raise ValuesError(f"no such file {path}", ("file",)) from None
         except (OSError, ValueError, UnicodeDecodeError) as exc:
             reason = " ".join(str(exc).split()) or type(exc).__name__
-            raise ValuesError(f"cannot read {path}: {_show(reason)}", ("file",)) from None
+            raise ValuesError(f"cannot read {path}: {show_value(reason)}", ("file",)) from None
         if data.size == 0:
             raise ValuesError(f"{path} holds no numbers", ("file",))
         # the folder is the experiment file's: keep the path as written, and the data's hash

@@ -398,8 +398,7 @@ def test_edited_files(fmt, record_property):
     report(record_property, count)
 
 
-# YAML's nastiest documents (alias bombs, deep nesting) take PyYAML about 100 s: slow
-@pytest.mark.parametrize("fmt", ["toml", pytest.param("yaml", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("fmt", ["toml", "yaml"])
 def test_extreme_documents(fmt, record_property):
     count = [0]
 

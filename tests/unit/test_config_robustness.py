@@ -114,6 +114,13 @@ def test_cyclic_and_exploding_yaml_aliases():
     assert time.perf_counter() - start < 2.0
     assert lines[0].startswith("name: expected a string, got [[[[...], [...]")
     assert all(len(line) < 200 for line in lines)
+    # the same in keys that take a list of values, read item by item
+    text = laughs + "name: x\nchain: {n: 3, k: 1, alpha: *a9}\noutput: {times: *a9}\n"
+    start = time.perf_counter()
+    lines = problems(text, "yaml")
+    assert time.perf_counter() - start < 2.0
+    assert lines[0].startswith("chain.alpha.[0]: expected a number, got [[[[...], [...]")
+    assert all(len(line) < 200 for line in lines)
 
 
 def test_yaml_merge_key_bomb():
