@@ -298,6 +298,11 @@ def _fail(issues: list[_Issue]) -> PydanticCustomError:
     )
 
 
+def _key_path(parts: tuple[str, ...]) -> str:
+    """A place in the file from its keys: ``chain.alpha[3]``, an index kept on its key."""
+    return "".join(p if p.startswith("[") or i == 0 else "." + p for i, p in enumerate(parts))
+
+
 def _key_text(key: Any) -> str:
     """A user's key for a message: one line, at most 60 characters."""
     if not isinstance(key, str):
@@ -646,7 +651,7 @@ def _expanded(chain: Chain, key: str, size: int, problems: list["_Problem"],
     try:
         a = generators.expand(values, size)
     except ValuesError as exc:
-        problems.append(_Problem(".".join((prefix, key) + exc.sub), exc.reason))
+        problems.append(_Problem(_key_path((prefix, key) + exc.sub), exc.reason))
         return None
     if key == "material":
         unknown = [i for i, name in enumerate(a) if name not in MATERIALS]
@@ -1426,7 +1431,7 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
                 parent = loc + issue.sub
                 problems.append(
                     _Problem(
-                        ".".join(parent),
+                        _key_path(parent),
                         issue.reason,
                         frozenset(".".join(loc[:-1] + (k,)) for k in issue.involves),
                     )
