@@ -331,7 +331,8 @@ def _check_int(value: Any) -> int:
     if isinstance(value, int) and not isinstance(value, bool):
         if -MAX_INT - 1 <= value <= MAX_INT:
             return value
-        raise _fail([_Issue(f"must be a 64-bit integer (at most 2**63 - 1), got {show_value(value)}")])
+        raise _fail([_Issue("must be a 64-bit integer (at most 2**63 - 1), got "
+                            f"{show_value(value)}")])
     raise _fail([_Issue(f"expected an integer, got {show_value(value)}")])
 
 
@@ -599,7 +600,8 @@ class WallSettings(BaseModel):
             return None
         name = _check_str(value)
         if name not in MATERIALS:
-            raise _fail([_Issue(f"unknown material {show_value(name)}{_suggest(name, list(MATERIALS))}"
+            raise _fail([_Issue(f"unknown material {show_value(name)}"
+                                f"{_suggest(name, list(MATERIALS))}"
                                 f" (known: {', '.join(MATERIALS)})")])
         return name
 
@@ -998,7 +1000,8 @@ class Output(BaseModel):
             return times
         if not isinstance(value, (list, tuple)):
             raise _fail(
-                [_Issue(f"expected a list of times or a table {{start, stop, step}}, got {show_value(value)}")]
+                [_Issue("expected a list of times or a table {start, stop, step}, got "
+                        f"{show_value(value)}")]
             )
         issues: list[_Issue] = []
         times: list[float] = []
