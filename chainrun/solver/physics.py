@@ -113,7 +113,8 @@ def line_momentum(v: np.ndarray, mass: np.ndarray) -> np.ndarray:
 
 def _law_energy(delta: np.ndarray, kappa, alpha) -> np.ndarray:
     e = np.zeros(np.broadcast_shapes(np.shape(delta), np.shape(kappa)))
-    with np.errstate(invalid="ignore"):
+    # (an overlap too large for a float's energy is inf, and the run says so: no warning)
+    with np.errstate(invalid="ignore", over="ignore"):
         np.power(np.clip(delta, 0.0, None), np.asarray(alpha, dtype=float) + 1.0, out=e,
                  where=np.asarray(delta) > 0.0)
     return np.asarray(kappa, dtype=float) * e / (np.asarray(alpha, dtype=float) + 1.0)

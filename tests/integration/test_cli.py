@@ -192,6 +192,18 @@ def test_the_command_starts_no_blas_threads(tmp_path):
     assert setting == "2" and threads > 1
 
 
+def test_a_run_that_fails_says_so_without_warnings(tmp_path):
+    # an overlap whose stored energy overflows: a named failure, no numpy warning beside it
+    (tmp_path / "overlap.toml").write_text(
+        'name = "overlap"\n[chain]\nn = 3\nk = 1\nalpha = 1.5\ngap = -1e130\n')
+    env = {k: v for k, v in os.environ.items() if k != runner.SCHEDULER_ENV}
+    done = subprocess.run([sys.executable, "-m", "chainrun", "simulate", "overlap.toml"],
+                          cwd=tmp_path, capture_output=True, text=True, env=env)
+    assert done.returncode == 1
+    assert "state became non-finite at t = 0" in done.stderr
+    assert "Warning" not in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
 def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
     # numba loads the kernels on their first call: a run must not pay for it in its time
     import chainrun.solver as solver
