@@ -132,9 +132,9 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     skipped = [r for r in result.skipped if r.ok]
     solver_time = sum(r.wall_time for r in computed)
     where = f" {result.workers}" if result.workers else ""
-    click.echo(f"{total} runs: {len(computed)} computed{where} ({solver_time:.2f} s of "
-               f"solver time), {len(skipped)} skipped, {len(result.failures)} failed; "
-               f"index: {outdir / result.index.name}", err=True)
+    click.echo(f"{total} run{'s' * (total != 1)}: {len(computed)} computed{where} "
+               f"({solver_time:.2f} s of solver time), {len(skipped)} skipped, "
+               f"{len(result.failures)} failed; index: {outdir / result.index.name}", err=True)
     if result.failures:
         sys.exit(EXIT_FAILED_RUNS)
 

@@ -201,6 +201,7 @@ def test_a_run_that_fails_says_so_without_warnings(tmp_path):
                           cwd=tmp_path, capture_output=True, text=True, env=env)
     assert done.returncode == 1
     assert "state became non-finite at t = 0" in done.stderr
+    assert "\n1 run: 0 computed" in done.stderr
     assert "Warning" not in done.stderr and "Traceback" not in done.stderr, done.stderr
 
 
