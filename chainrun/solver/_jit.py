@@ -56,7 +56,7 @@ def entry(fn):
     compile_ = dispatcher.compile
 
     def compile(sig):
-        with _slp_vectorised():
+        with _slp_vectorised(), _without_blas_probe():
             return compile_(sig)
 
     dispatcher.compile = compile
@@ -108,6 +108,35 @@ def _slp_vectorised():
         yield
     finally:
         config.SLP_VECTORIZE = old
+
+
+#: what numba imports to see whether compiled code may call BLAS
+_BLAS_PROBE = "scipy.linalg.cython_blas"
+
+
+@contextlib.contextmanager
+def _without_blas_probe():
+    """numba's BLAS probe fails at once while an entry point compiles or loads.
+
+    Before its first compile or cache load in a process, numba loads its
+    implementations of numpy, and with them imports ``scipy.linalg`` (about 0.1 s, an
+    eighth of a warm run's start-up) to see whether ``np.convolve`` and
+    ``np.correlate`` may call BLAS. No kernel calls BLAS. A None in ``sys.modules``
+    makes that import fail without loading anything; numba then uses its own loop
+    there. Its linear algebra
+    (``np.dot``, ``np.linalg``) imports scipy's BLAS when it is compiled, after this,
+    so other numba code in the process loses nothing. Where scipy's BLAS is loaded
+    already, nothing changes.
+    """
+    if _BLAS_PROBE in sys.modules:
+        yield
+        return
+    sys.modules[_BLAS_PROBE] = None
+    try:
+        yield
+    finally:
+        if sys.modules.get(_BLAS_PROBE, 0) is None:
+            del sys.modules[_BLAS_PROBE]
 
 
 def _cached(dispatcher, folder: Path) -> bool:
