@@ -479,6 +479,8 @@ def section_compile(procs: Processes) -> dict:
 
 
 _FLOOR_SCRIPT = """
+import sys
+sys.modules["scipy.linalg.cython_blas"] = None  # numba's BLAS probe fails, as in chainrun
 import numba
 @numba.njit(cache=True)
 def f(x):
@@ -490,7 +492,8 @@ f(1.0)
 def _numba_floor(scratch: Path, runs: int = 5) -> list[float]:
     """Wall times of a Python process that loads one cached one-line numba function
     and calls it: what any process running cached numba code pays before its own work
-    (the warm start-up's floor)."""
+    (the warm start-up's floor). numba's probe for scipy's BLAS fails at once there, as
+    it does while chainrun loads its kernels (``_jit._without_blas_probe``)."""
     folder = Path(tempfile.mkdtemp(prefix="numba-floor-", dir=scratch))
     script = folder / "floor.py"
     script.write_text(_FLOOR_SCRIPT)
