@@ -123,10 +123,9 @@ def _without_blas_probe():
     eighth of a warm run's start-up) to see whether ``np.convolve`` and
     ``np.correlate`` may call BLAS. No kernel calls BLAS. A None in ``sys.modules``
     makes that import fail without loading anything; numba then uses its own loop
-    there. Its linear algebra
-    (``np.dot``, ``np.linalg``) imports scipy's BLAS when it is compiled, after this,
-    so other numba code in the process loses nothing. Where scipy's BLAS is loaded
-    already, nothing changes.
+    there. Its linear algebra (``np.dot``, ``np.linalg``) imports scipy's BLAS when it
+    is compiled, after this, so other numba code in the process loses nothing. Where
+    scipy's BLAS is loaded already, nothing changes.
     """
     if _BLAS_PROBE in sys.modules:
         yield

@@ -192,6 +192,30 @@ def test_the_command_starts_no_blas_threads(tmp_path):
     assert setting == "2" and threads > 1
 
 
+def test_loading_the_kernels_leaves_scipys_blas_alone(tmp_path):
+    # numba probes for scipy's BLAS (about 0.1 s of imports) before its first load; the
+    # kernels need none, and numba's own linear algebra still finds it afterwards
+    code = """
+import sys
+import numba
+import numpy as np
+from chainrun.solver import load_kernels
+load_kernels()
+print("scipy.linalg" in sys.modules)
+dot = numba.njit(lambda a, b: np.dot(a, b))
+convolve = numba.njit(lambda a, b: np.convolve(a, b))
+a = np.array([1.0, 2.0, 3.0])
+b = np.array([0.5, -1.0])
+print(dot(a, a), convolve(a, b).tolist())
+import scipy.linalg
+print(scipy.linalg.solve(np.eye(2), np.ones(2)).tolist())
+"""
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.split("\n")[:3] == [
+        "False", "14.0 [0.5, 0.0, -0.5, -3.0]", "[1.0, 1.0]"], done.stdout + done.stderr
+
+
 def test_a_run_that_fails_says_so_without_warnings(tmp_path):
     # an overlap whose stored energy overflows: a named failure, no numpy warning beside it
     (tmp_path / "overlap.toml").write_text(
