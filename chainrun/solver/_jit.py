@@ -110,8 +110,8 @@ def _slp_vectorised():
         config.SLP_VECTORIZE = old
 
 
-#: what numba imports to see whether compiled code may call BLAS
-_BLAS_PROBE = "scipy.linalg.cython_blas"
+def _no_blas():
+    raise ImportError("chainrun's kernels call no BLAS")
 
 
 @contextlib.contextmanager
@@ -119,23 +119,32 @@ def _without_blas_probe():
     """numba's BLAS probe fails at once while an entry point compiles or loads.
 
     Before its first compile or cache load in a process, numba loads its
-    implementations of numpy, and with them imports ``scipy.linalg`` (about 0.1 s, an
-    eighth of a warm run's start-up) to see whether ``np.convolve`` and
-    ``np.correlate`` may call BLAS. No kernel calls BLAS. A None in ``sys.modules``
-    makes that import fail without loading anything; numba then uses its own loop
-    there. Its linear algebra (``np.dot``, ``np.linalg``) imports scipy's BLAS when it
-    is compiled, after this, so other numba code in the process loses nothing. Where
-    scipy's BLAS is loaded already, nothing changes.
+    implementations of numpy (``numba.np.arraymath``), which import ``scipy.linalg``
+    (about 0.1 s, an eighth of a warm run's start-up) through
+    ``numba.np.linalg.ensure_blas``, only to see whether ``np.convolve`` and
+    ``np.correlate`` may call BLAS. No kernel calls BLAS: while numba loads them, that
+    function raises at once, and numba uses its own loop there. It is numba's own again
+    afterwards, for its linear algebra (``np.dot``, ``np.linalg``), which calls it when
+    compiled; numba's compiler lock is held throughout, so no compile in another thread
+    sees the stand-in, and no import anywhere is touched. Where numba's
+    implementations are loaded already, or scipy's BLAS, nothing changes.
     """
-    if _BLAS_PROBE in sys.modules:
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
         yield
         return
-    sys.modules[_BLAS_PROBE] = None
-    try:
+    from numba.core.compiler_lock import global_compiler_lock
+    from numba.np import linalg
+
+    probe = getattr(linalg, "ensure_blas", None)
+    if probe is None:  # (a numba that probes otherwise: it pays for its probe)
         yield
-    finally:
-        if sys.modules.get(_BLAS_PROBE, 0) is None:
-            del sys.modules[_BLAS_PROBE]
+        return
+    with global_compiler_lock:
+        linalg.ensure_blas = _no_blas
+        try:
+            yield
+        finally:
+            linalg.ensure_blas = probe
 
 
 def _cached(dispatcher, folder: Path) -> bool:
