@@ -479,9 +479,11 @@ def section_compile(procs: Processes) -> dict:
 
 
 _FLOOR_SCRIPT = """
-import sys
-sys.modules["scipy.linalg.cython_blas"] = None  # numba's BLAS probe fails, as in chainrun
 import numba
+from numba.np import linalg
+def no_blas():
+    raise ImportError
+linalg.ensure_blas = no_blas  # numba's BLAS probe fails at once, as while chainrun loads
 @numba.njit(cache=True)
 def f(x):
     return x + 1.0
