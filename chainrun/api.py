@@ -108,7 +108,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
                                 {"long_name": "contact force on each side of a sensor ball"})
         data["sensor_mean_force"] = (("sample", "sensor"), run.sensor_force.mean(axis=2),
                                      {"long_name": "mean of the two: what a sensor measures"})
-    from chainrun.store import UNITS
+    from chainrun.units import UNITS
 
     si = run.units == "si"
     for name, (_dims, _values, meta) in data.items():

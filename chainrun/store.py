@@ -47,6 +47,7 @@ from chainrun import atomic
 from chainrun.errors import StoreError
 from chainrun.solver import EventKind, Solution
 from chainrun.solver import physics
+from chainrun.units import UNITS
 
 if TYPE_CHECKING:  # the config parser (pydantic, YAML) is not needed to read files
     from chainrun.config import RunSpec
@@ -93,17 +94,6 @@ _LIBVER = "v108"
 
 #: The names of the observables written at each snapshot.
 OBSERVABLES = ("kinetic_energy", "potential_energy", "momentum")
-
-#: H5MD ``unit`` of each quantity, by the units of the run. The paper's units are
-#: written "1": every coefficient of its equation is 1 (docs/schema.md gives their
-#: meaning in kg, m and s).
-UNITS: dict[str, dict[str, str]] = {
-    "si": {"time": "s", "position": "m", "velocity": "m/s", "mass": "kg", "force": "N",
-           "energy": "J", "momentum": "kg m/s", "stiffness": "N m-alpha", "alpha": "1",
-           "gap": "m"},
-    "paper": dict.fromkeys(("time", "position", "velocity", "mass", "force", "energy",
-                            "momentum", "stiffness", "alpha", "gap"), "1"),
-}
 
 #: Columns every index entry must have, in table order, with their dtype.
 INDEX_COLUMNS: dict[str, str] = {

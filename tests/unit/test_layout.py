@@ -16,6 +16,7 @@ ROOT = Path(__file__).resolve().parents[2]
 RANK = {
     "chainrun.errors": 0, "chainrun.atomic": 0, "chainrun._gc": 0,
     "chainrun.materials": 0,  # data only
+    "chainrun.units": 0,
     "chainrun.solver": 1, "chainrun.generators": 1,
     "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
     "chainrun.store": 3,

@@ -1,0 +1,103 @@
+"""Units of a run's quantities: what each is measured in, and how a person reads it.
+
+This module owns the unit of every quantity chainrun writes (``UNITS``, by the run's
+``units``, ``"paper"`` or ``"si"``) and how values are shown: in SI scaled to a readable
+prefix (``µs``, ``mm``, ``kN``), in the paper's units as "paper units". The store writes
+the unit strings; the plots, movies and summaries take their labels from here.
+
+A prefix is chosen for a whole set of values (an axis, a column) so that the largest
+magnitude falls in [1, 1000): ``scale_for("time", "si", [0, 2.2e-4])`` gives
+``Scaled(factor=1e6, unit="µs")``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["PAPER", "UNITS", "Scaled", "axis_label", "format_value", "scale_for"]
+
+#: How the paper's units are named in labels: every coefficient of its equation is 1.
+PAPER = "paper units"
+
+#: H5MD ``unit`` of each quantity, by the units of the run. The paper's units are
+#: written "1" (docs/schema.md gives their meaning in kg, m and s).
+UNITS: dict[str, dict[str, str]] = {
+    "si": {"time": "s", "position": "m", "velocity": "m/s", "mass": "kg", "force": "N",
+           "energy": "J", "momentum": "kg m/s", "stiffness": "N m-alpha", "alpha": "1",
+           "gap": "m", "diameter": "m", "frequency": "Hz", "angular_frequency": "rad/s"},
+    "paper": dict.fromkeys(("time", "position", "velocity", "mass", "force", "energy",
+                            "momentum", "stiffness", "alpha", "gap", "diameter",
+                            "frequency", "angular_frequency"), "1"),
+}
+
+#: The unit a prefix goes on, for each SI quantity that takes one: a mass in grams, a
+#: momentum in newton seconds (kg m/s), a velocity on its metre.
+_BASE = {"time": ("", "s"), "position": ("", "m"), "gap": ("", "m"), "diameter": ("", "m"),
+         "velocity": ("", "m/s"), "force": ("", "N"), "energy": ("", "J"),
+         "momentum": ("", "N s"), "mass": ("", "g"), "frequency": ("", "Hz"),
+         "angular_frequency": ("", "rad/s")}
+#: a mass is written in grams: 1 kg is 1000 g
+_IN_BASE = {"mass": 1e3}
+_PREFIXES = ((1e12, "T"), (1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"),
+             (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"), (1e-15, "f"))
+
+
+@dataclass(frozen=True)
+class Scaled:
+    """Values times ``factor`` are in ``unit`` (``""``: a pure number)."""
+
+    factor: float
+    unit: str
+
+    def __call__(self, values):
+        """``values`` in ``unit``."""
+        return np.asarray(values, dtype=float) * self.factor
+
+
+def _largest(values) -> float:
+    a = np.abs(np.asarray(values, dtype=float))
+    a = a[np.isfinite(a)]
+    return float(a.max()) if a.size else 0.0
+
+
+def scale_for(quantity: str, units: str, values=()) -> Scaled:
+    """The factor and unit that show ``values`` of ``quantity`` readably.
+
+    In SI the prefix puts the largest magnitude of ``values`` in [1, 1000) (no prefix
+    when they are all 0 or none are finite); a quantity without a prefixed unit
+    (a stiffness, an exponent) keeps its SI unit. In the paper's units the factor is 1
+    and the unit ``PAPER``.
+    """
+    if units != "si":
+        return Scaled(1.0, "" if quantity == "alpha" else PAPER)
+    if quantity not in _BASE:
+        unit = UNITS["si"].get(quantity, "")
+        return Scaled(1.0, "" if unit == "1" else unit)
+    to_base = _IN_BASE.get(quantity, 1.0)
+    top = _largest(values) * to_base
+    size = 1.0
+    if top > 0.0:
+        for size, _ in _PREFIXES:
+            if top >= size * (1.0 - 1e-12):
+                break
+    prefix = dict(_PREFIXES)[size]
+    return Scaled(to_base / size, prefix + _BASE[quantity][1])
+
+
+def axis_label(name: str, quantity: str, units: str, values=()) -> tuple[str, Scaled]:
+    """``"name (unit)"`` for an axis of ``values``, and the scaling to draw them with."""
+    scaled = scale_for(quantity, units, values)
+    return (f"{name} ({scaled.unit})" if scaled.unit else name), scaled
+
+
+def format_value(value: float, quantity: str, units: str, digits: int = 4) -> str:
+    """One value for a person: ``"223.6 µs"`` in SI, ``"6.177"`` in the paper's units
+    (``digits`` significant digits; ``nan``, ``inf`` as such)."""
+    if not math.isfinite(value):
+        return str(value)
+    scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
+    text = f"{value * scaled.factor:.{digits}g}"
+    return f"{text} {scaled.unit}" if scaled.unit else text

@@ -1,0 +1,43 @@
+"""Units and their prefixes (chainrun.units): what a person reads on an axis or a line."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from chainrun.units import PAPER, axis_label, format_value, scale_for
+
+
+@pytest.mark.parametrize("quantity, values, factor, unit", [
+    ("time", [0.0, 2.2e-4], 1e6, "µs"),
+    ("time", [5.0], 1.0, "s"),
+    ("position", [3e-9], 1e9, "nm"),
+    ("velocity", [0.005], 1e3, "mm/s"),
+    ("velocity", [0.0005], 1e6, "µm/s"),
+    ("force", [1000.0], 1e-3, "kN"),
+    ("force", [999.0], 1.0, "N"),
+    ("energy", [-6.05e-5], 1e6, "µJ"),
+    ("mass", [0.002145], 1e3, "g"),   # a mass takes its prefix on the gram
+    ("mass", [3.2], 1.0, "kg"),
+    ("momentum", [1e-4], 1e6, "µN s"),
+    ("time", [0.0, math.nan], 1.0, "s"),  # nothing finite to scale by
+])
+def test_an_si_prefix_puts_the_largest_value_in_1_to_1000(quantity, values, factor, unit):
+    scaled = scale_for(quantity, "si", values)
+    assert scaled.unit == unit
+    assert scaled.factor == pytest.approx(factor, rel=1e-15)
+
+
+def test_paper_units_are_named_and_not_scaled():
+    assert scale_for("time", "paper", [1e-5]).factor == 1.0
+    assert axis_label("time", "time", "paper", [3.0])[0] == f"time ({PAPER})"
+    assert axis_label("time", "time", "si", [3e-3])[0] == "time (ms)"
+    assert scale_for("stiffness", "si", [6e9]).unit == "N m-alpha"
+
+
+def test_a_value_for_a_person():
+    assert format_value(2.23585e-4, "time", "si") == "223.6 µs"
+    assert format_value(0.5, "velocity", "si") == "500 mm/s"
+    assert format_value(6.17702, "time", "paper") == "6.177"
+    assert format_value(math.inf, "time", "si") == "inf"
