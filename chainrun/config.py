@@ -715,7 +715,7 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
                      for side in wall_real]
         if problems:
             raise LineError(problems)
-    young = poisson = diameter = None
+    young = poisson = diameter = names = None
     line_kw: dict[str, Any] = {}
     if real:
         explicit = [key for key in ("young", "poisson", "density") if getattr(chain, key) is not None]
@@ -748,6 +748,8 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
         if problems:
             raise LineError(problems)
         radius = diameter / 2.0
+        line_kw["diameter"] = diameter
+        line_kw["material"] = names if chain.material is not None else ""
         line_kw["mass"] = physics.sphere_mass(density, diameter)
         line_kw["stiffness"] = physics.hertz_stiffness(young[:-1], poisson[:-1], radius[:-1],
                                                        young[1:], poisson[1:], radius[1:])

@@ -251,7 +251,7 @@ def _array(group: h5py.Group, name: str, data, scales: list[h5py.Dataset],
            long_name: str, dtype=None) -> h5py.Dataset:
     """A fixed-size dataset, chunked and compressed when large, with dims attached."""
     data = np.asarray(data, dtype=dtype)
-    if data.size > COMPRESS_ABOVE and data.dtype.kind in "biuf":
+    if data.size > COMPRESS_ABOVE and data.dtype.kind in "biufS":
         # one value throughout (a uniform line's masses): the fill value, stored nowhere
         bits = _bits(data)
         fill = data.reshape(-1)[0] if bits is not None and np.all(bits == bits[0]) else None
@@ -582,6 +582,13 @@ class RunWriter:
         ):
             ds = _array(model, name, getattr(line, name), [scale], long_name)
             ds.attrs["unit"] = units[unit]
+        if line.diameter is not None:
+            _array(model, "diameter", line.diameter, [ball],
+                   "diameter of each sphere").attrs["unit"] = units["diameter"]
+        if line.material is not None:
+            _array(model, "material", np.char.encode(line.material, "ascii"), [ball],
+                   "material of each sphere (chainrun.materials; empty: constants given "
+                   "explicitly)")
         if line.is_damped:
             eta = _array(model, "damping", line.damping, [contact],
                          "eta of F = max(0, kappa delta^alpha + eta delta^beta d(delta)/dt)")
@@ -886,7 +893,8 @@ class RunData:
     model : dict or None
         The line as solved (``/model``): ``units``; per ball ``mass``, ``velocity``,
         ``position``, ``force`` (shape (N,)); per contact ``stiffness``, ``alpha``,
-        ``gap``, ``damping``, ``damping_exponent`` (shape (N-1,)); ``walls``
+        ``gap``, ``damping``, ``damping_exponent`` (shape (N-1,)); for real spheres
+        ``diameter`` and ``material`` (shape (N,); None otherwise); ``walls``
         ({"left"/"right": {"stiffness", "alpha", "gap", "damping",
         "damping_exponent"}}, the walls present) and ``scales`` (mass, length, time, velocity,
         force: the paper's units of this line, in its units). None for files written
@@ -1096,6 +1104,9 @@ def _read_model(h5: h5py.File) -> dict[str, Any] | None:
     for name in ("damping", "damping_exponent"):  # a damped line's
         n_contacts = model["stiffness"].shape[0]
         model[name] = _get(group, name)[()] if name in group else np.zeros(n_contacts)
+    model["diameter"] = _get(group, "diameter")[()] if "diameter" in group else None
+    model["material"] = (np.char.decode(_get(group, "material")[()], "ascii")
+                         if "material" in group else None)
     model["walls"] = {side: {key: float(walls[side].attrs.get(key, 0.0))
                              for key in ("stiffness", "alpha", "gap", "damping",
                                          "damping_exponent")}

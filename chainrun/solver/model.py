@@ -22,7 +22,7 @@ and stiffnesses are of order 1 there whatever units they were given in.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -92,6 +92,17 @@ def _per(name: str, value, size: int) -> np.ndarray:
     return a.copy()
 
 
+def _names(value, size: int) -> np.ndarray:
+    """``value`` (a name or a sequence of ``size`` names) as a str array of ``size``."""
+    a = np.asarray(value, dtype=str)
+    if a.ndim == 0:
+        return np.broadcast_to(a, (size,))
+    if a.shape != (size,):
+        raise ValueError(f"material must be a name or a list of {size} names, "
+                         f"got a list of {a.size}")
+    return a.copy()
+
+
 def _check(name: str, a: np.ndarray, low: float | None = None, strict: bool = True):
     bad = ~np.isfinite(a)
     if low is not None:
@@ -108,7 +119,9 @@ class Line:
 
     Arrays are per ball (``mass``, ``velocity``, ``force``, ``position``, shape (N,))
     or per contact (``stiffness``, ``alpha``, ``gap``, ``damping``,
-    ``damping_exponent``, shape (N-1,)).
+    ``damping_exponent``, shape (N-1,)). A line of real spheres also records what they
+    are, per ball: ``diameter`` and ``material`` (a preset's name, ``""`` for constants
+    given explicitly); the solver does not read them, the run file keeps them.
     """
 
     mass: np.ndarray
@@ -122,6 +135,8 @@ class Line:
     right: Wall | None = None
     damping: np.ndarray | None = None
     damping_exponent: np.ndarray | None = None
+    diameter: np.ndarray | None = None
+    material: np.ndarray | None = None
 
     def __post_init__(self):
         n = self.mass.shape[0]
@@ -145,6 +160,12 @@ class Line:
         _check("damping_exponent", self.damping_exponent, 0.0, strict=False)
         for name in ("gap", "velocity", "force", "position"):
             _check(name, getattr(self, name))
+        for name in ("diameter", "material"):
+            a = getattr(self, name)
+            if a is not None and a.shape != (n,):
+                raise ValueError(f"{name} must have one value per ball ({n})")
+        if self.diameter is not None:
+            _check("diameter", self.diameter, 0.0)
         for name in ("mass", "stiffness", "alpha", "gap", "velocity", "force", "position",
                      "damping", "damping_exponent"):
             getattr(self, name).setflags(write=False)
@@ -153,7 +174,8 @@ class Line:
     def make(cls, n: int, *, mass=1.0, stiffness=1.0, alpha=1.5, gap=0.0,
              velocity=None, k: int | None = None, speed: float = 1.0, force=0.0,
              position=0.0, damping=0.0, damping_exponent=0.0,
-             left: Wall | None = None, right: Wall | None = None) -> Line:
+             left: Wall | None = None, right: Wall | None = None,
+             diameter=None, material=None) -> Line:
         """A line from scalars (every ball or contact alike) or sequences.
 
         The initial velocities are ``velocity`` (one per ball), or the first ``k``
@@ -183,6 +205,8 @@ class Line:
             damping=_per("damping", damping, n - 1),
             damping_exponent=_per("damping_exponent", damping_exponent, n - 1),
             left=left, right=right,
+            diameter=None if diameter is None else _per("diameter", diameter, n),
+            material=None if material is None else _names(material, n),
         )
 
     @classmethod
@@ -340,8 +364,4 @@ def precompress(line: Line, load: float) -> Line:
     x[:k] = line.position[:k] + x[k]
     force = np.zeros(line.n)
     force[k] = load
-    return Line(mass=line.mass.copy(), stiffness=line.stiffness.copy(),
-                alpha=line.alpha.copy(), gap=line.gap.copy(),
-                velocity=line.velocity.copy(), force=force, position=x,
-                damping=line.damping.copy(), damping_exponent=line.damping_exponent.copy(),
-                left=line.left, right=line.right)
+    return replace(line, force=force, position=x)
