@@ -5,8 +5,9 @@ tables as keyword arguments), runs it through the same pipeline as ``chainrun
 simulate`` (validation, solver, run file) and returns what ``open_run`` reads back from
 that file, so a Dataset made here and one read from the command's file are the same.
 
-Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``event`` (the contact event log).
-Quantities are in the paper's units (mass, stiffness and striker speed 1).
+Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``contact`` (1..N-1), ``wall`` and
+``event`` (the contact event log). Quantities are in the run's units: SI for an
+experiment in SI, else the paper's (mass, stiffness and striker speed 1).
 
 Examples
 --------
@@ -31,91 +32,168 @@ __all__ = ["open_run", "simulate"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
 
+#: Variables along ``ball``: (long name, quantity; None for numbers and names).
 _BALL_VARS = {
-    "final_position": "displacement at the end of the run",
-    "final_velocity": "velocity at the end of the run",
-    "separation_time": "time the ball last lost contact (NaN: never touched or never left)",
-    "separation_velocity": "velocity when the ball last lost contact",
+    "mass": ("mass of each ball", "mass"),
+    "initial_velocity": ("velocity at t = 0", "velocity"),
+    "initial_position": ("displacement at t = 0 (non-zero when precompressed)", "position"),
+    "force": ("constant external force (+ towards ball N)", "force"),
+    "final_position": ("displacement at the end of the run", "position"),
+    "final_velocity": ("velocity at the end of the run", "velocity"),
+    "separation_time": ("time the ball last lost contact (NaN: never touched or never "
+                        "left)", "time"),
+    "separation_velocity": ("velocity when the ball last lost contact", "velocity"),
+}
+#: Variables along ``contact`` (contact j joins balls j and j+1).
+_CONTACT_VARS = {
+    "stiffness": ("kappa of the force law F = kappa delta_+^alpha", "stiffness"),
+    "alpha": ("exponent of the force law", None),
+    "gap": ("gap: delta_j = x_j - x_(j+1) - gap_j (< 0: an initial overlap)", "gap"),
+    "damping": ("eta of F = max(0, kappa delta^alpha + eta delta^beta d(delta)/dt)",
+                "damping"),
+    "damping_exponent": ("beta, the damping's exponent", None),
+    "contact_dissipation": ("energy each contact dissipated by the end", "energy"),
+}
+#: Variables along ``wall`` (left: before ball 1, right: after ball N); NaN (or 0 for
+#: impulse and dissipation) where there is no wall.
+_WALL_VARS = {
+    "wall_stiffness": ("kappa of the wall's contact (NaN: no wall)", "stiffness"),
+    "wall_alpha": ("exponent of the wall's contact (NaN: no wall)", None),
+    "wall_gap": ("the wall's gap: delta = x_N - gap (right), -x_1 - gap (left)", "gap"),
+    "wall_damping": ("eta of the wall's contact", "damping"),
+    "wall_damping_exponent": ("beta of the wall's contact", None),
+    "wall_impulse": ("impulse the wall gave the line by the end (+ towards ball N)",
+                     "momentum"),
+    "wall_dissipation": ("energy the wall's contact dissipated by the end", "energy"),
 }
 _EVENT_VARS = {
-    "event_time": "time of the contact event",
-    "event_contact": "contact j (0-based) joins balls j+1 and j+2",
-    "event_kind": "chainrun.solver.EventKind: -3 unload, -2 release, -1 open, 1 close, "
-                  "2 engage, 3 reload",
+    "event_time": ("time of the contact event", "time"),
+    "event_contact": ("contact j joins balls j and j+1 (0: the left wall, N: the right "
+                      "wall)", None),
+    "event_kind": ("chainrun.solver.EventKind: -3 unload, -2 release, -1 open, 1 close, "
+                   "2 engage, 3 reload", None),
 }
-#: the quantity of each variable, for its unit in a run in SI
-_QUANTITY = {"position": "position", "velocity": "velocity", "final_position": "position",
-             "final_velocity": "velocity", "separation_time": "time",
-             "separation_velocity": "velocity", "event_time": "time",
-             "kinetic_energy": "energy", "potential_energy": "energy", "momentum": "momentum",
-             "dissipated_energy": "energy", "contact_dissipation": "energy",
-             "sensor_force": "force", "sensor_mean_force": "force"}
 _OBSERVABLES = {
-    "kinetic_energy": "kinetic energy of the line",
-    "potential_energy": "energy stored in the contacts",
-    "momentum": "momentum of the line",
+    "kinetic_energy": ("kinetic energy of the line, sum m v^2/2", "energy"),
+    "potential_energy": ("energy stored in the contacts and walls, less the work of the "
+                         "external forces", "energy"),
+    "momentum": ("momentum of the line, sum m v", "momentum"),
+    "dissipated_energy": ("energy the damping dissipated since t = 0", "energy"),
 }
+
+
+def _unit(quantity: str | None, units: str) -> str | None:
+    """The ``units`` attribute of a quantity: SI's, or the paper's units."""
+    from chainrun.units import UNITS
+
+    if quantity is None:
+        return None
+    if quantity == "damping":
+        return "N s m^-(1+beta)" if units == "si" else _UNITS
+    return UNITS["si"][quantity] if units == "si" else _UNITS
+
+
+def _variables(run) -> tuple[dict, dict]:
+    """The run's data variables and coordinates, each variable with its long name and
+    units: every number the file holds about the line, its run and its results."""
+    import numpy as np
+
+    line, n, units = run.line, run.n, run.units
+    walls = (line.left, line.right)
+    coords = {"time": ("time", run.times), "ball": ("ball", np.arange(1, n + 1)),
+              "contact": ("contact", np.arange(1, n)),
+              "wall": ("wall", ["left", "right"]),
+              "event": ("event", np.arange(run.event_time.size))}
+    values = {
+        "mass": line.mass, "initial_velocity": line.velocity,
+        "initial_position": line.position, "force": line.force,
+        **{name: getattr(run, name) for name in ("final_position", "final_velocity",
+                                                 "separation_time", "separation_velocity")},
+        **{name: getattr(line, name) for name in ("stiffness", "alpha", "gap", "damping",
+                                                  "damping_exponent")},
+        "contact_dissipation": run.contact_dissipation,
+        **{f"wall_{key}": np.array([np.nan if w is None else getattr(w, key) for w in walls])
+           for key in ("stiffness", "alpha", "gap", "damping", "damping_exponent")},
+        "wall_impulse": run.wall_impulse, "wall_dissipation": run.wall_dissipation,
+        "event_time": run.event_time, "event_contact": run.event_contact,
+        "event_kind": run.event_kind,
+        **{name: run.observables[name] for name in _OBSERVABLES},
+    }
+    data = {
+        "position": (("time", "ball"), np.asarray(run.positions).reshape(-1, n),
+                     {"long_name": "displacement from the initial (touching) position"},
+                     "position"),
+        "velocity": (("time", "ball"), np.asarray(run.velocities).reshape(-1, n),
+                     {"long_name": "velocity"}, "velocity"),
+    }
+    for dim, table in (("ball", _BALL_VARS), ("contact", _CONTACT_VARS), ("wall", _WALL_VARS),
+                       ("event", _EVENT_VARS), ("time", _OBSERVABLES)):
+        for name, (text, quantity) in table.items():
+            data[name] = (dim, np.asarray(values[name]), {"long_name": text}, quantity)
+    if line.diameter is not None:
+        data["diameter"] = ("ball", np.asarray(line.diameter),
+                            {"long_name": "diameter of each sphere"}, "diameter")
+        data["material"] = ("ball", np.asarray(line.material, dtype=str),
+                            {"long_name": "material of each sphere ('': constants given "
+                                          "explicitly)"}, None)
+    if run.sensor_balls.size:
+        coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
+                   "side": ("side", ["towards ball 1", "away from ball 1"])}
+        data["sensor_force"] = (("sample", "sensor", "side"), run.sensor_force,
+                                {"long_name": "contact force on each side of a sensor ball"},
+                                "force")
+        data["sensor_mean_force"] = (("sample", "sensor"), run.sensor_force.mean(axis=2),
+                                     {"long_name": "mean of the two: what a sensor measures"},
+                                     "force")
+    out = {}
+    for name, (dims, array, meta, quantity) in data.items():
+        unit = _unit(quantity, units)
+        out[name] = (dims, array, meta | ({"units": unit} if unit else {}))
+    for name, unit in (("time", "time"), ("sample", "time")):
+        if name in coords:
+            coords[name] = (coords[name][0], coords[name][1], {"units": _unit(unit, units)})
+    return out, coords
 
 
 def open_run(path) -> "xarray.Dataset":  # noqa: F821
     """The run file at ``path`` as an ``xarray.Dataset``, loaded into memory.
 
-    Data variables: ``position`` and ``velocity`` (time, ball); with force sensors,
-    ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``; the observables
-    ``kinetic_energy``, ``potential_energy``, ``momentum`` (time), and for a damped line
-    ``dissipated_energy`` (time) and ``contact_dissipation`` (contact); the final and
-    separation positions, velocities and times (ball); the event log ``event_time``,
-    ``event_contact``, ``event_kind`` (event). Attributes: the run's parameters
-    (``n``, ``k``, ``alpha``, ``rtol``, ``t_end``, ...), its outcome (``outcome``,
-    ``terminal``, ``end_time``, ``message``), its diagnostics (``diagnostics_*``), the
-    config text and hash, and the writing software's version. Every quantity has its
-    ``units``: the paper's, or SI (m, s, m/s, J, N, ...) for a run in SI.
+    Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``contact`` (1..N-1: contact j
+    joins balls j and j+1), ``wall`` (``"left"``, ``"right"``), ``event`` (the contact
+    event log); with force sensors ``sample``, ``sensor`` (their ball numbers) and
+    ``side``. Balls and contacts are numbered alike in every variable.
+
+    Data variables: ``position`` and ``velocity`` (time, ball); the observables
+    ``kinetic_energy``, ``potential_energy``, ``momentum`` and ``dissipated_energy``
+    (time); the line: ``mass``, ``initial_velocity``, ``initial_position``, ``force``
+    (ball), and for real spheres ``diameter`` and ``material``; ``stiffness``,
+    ``alpha``, ``gap``, ``damping``, ``damping_exponent`` (contact); the walls'
+    ``wall_stiffness``, ``wall_alpha``, ``wall_gap``, ``wall_damping``,
+    ``wall_damping_exponent`` (NaN where there is no wall) and what they did,
+    ``wall_impulse`` and ``wall_dissipation`` (wall); the results: ``final_position``,
+    ``final_velocity``, ``separation_time``, ``separation_velocity`` (ball),
+    ``contact_dissipation`` (contact); the event log ``event_time``, ``event_contact``
+    (the contact's number, 0 and N for the walls) and ``event_kind`` (event); with
+    sensors, ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``.
+    Every quantity has its ``units``: SI (s, m, m/s, kg, N, J, ...) for a run in SI,
+    else the paper's. Attributes: the run's parameters (``n``, ``k``, ``alpha``,
+    ``rtol``, ``t_end``, ...), its outcome (``outcome``, ``terminal``, ``end_time``,
+    ``message``), its diagnostics (``diagnostics_*``), the line's scales
+    (``scales_*``), the config text and hash, and the writing software's version.
 
     Raises ``chainrun.errors.StoreError`` (one line) for a file that is not a readable
     chainrun run file.
     """
-    import numpy as np
     import xarray as xr
 
     from chainrun.store import read_run
 
     run = read_run(path)
-    n = run.n
-    coords = {"time": ("time", run.times), "ball": ("ball", np.arange(1, n + 1)),
-              "event": ("event", np.arange(run.event_time.size))}
-    data = {
-        "position": (("time", "ball"), np.asarray(run.positions).reshape(-1, n),
-                     {"long_name": "displacement from the initial position"}),
-        "velocity": (("time", "ball"), np.asarray(run.velocities).reshape(-1, n),
-                     {"long_name": "velocity"}),
-    }
-    data |= {name: ("time", run.observables[name], {"long_name": text})
-             for name, text in _OBSERVABLES.items()}
-    data |= {name: ("ball", getattr(run, name), {"long_name": text})
-             for name, text in _BALL_VARS.items()}
-    data |= {name: ("event", getattr(run, name), {"long_name": text})
-             for name, text in _EVENT_VARS.items()}
-    if "dissipated_energy" in run.observables:
-        data["dissipated_energy"] = ("time", run.observables["dissipated_energy"],
-                                     {"long_name": "energy the damping dissipated since t = 0"})
-        coords["contact"] = ("contact", np.arange(1, n))
-        data["contact_dissipation"] = ("contact", run.contact_dissipation,
-                                       {"long_name": "energy each contact dissipated"})
-    if run.sensor_balls.size:
-        coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
-                   "side": ("side", ["towards ball 1", "away from ball 1"])}
-        data["sensor_force"] = (("sample", "sensor", "side"), run.sensor_force,
-                                {"long_name": "contact force on each side of a sensor ball"})
-        data["sensor_mean_force"] = (("sample", "sensor"), run.sensor_force.mean(axis=2),
-                                     {"long_name": "mean of the two: what a sensor measures"})
-    from chainrun.units import UNITS
-
+    data, coords = _variables(run)
     si = run.units == "si"
-    for name, (_dims, _values, meta) in data.items():
-        if name not in ("event_contact", "event_kind"):  # numbers, not quantities
-            meta["units"] = UNITS["si"][_QUANTITY[name]] if si else _UNITS
     params = {k: v for k, v in run.parameters.items()
               if k not in ("config_resolved", "overrides")}
+    scales = run.model["scales"] if run.model else {}
     attrs = {
         **{k: ("none" if v is None else v) for k, v in params.items()},
         "overrides": json.dumps(run.parameters.get("overrides", {})),
@@ -124,6 +202,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         "dissipated_energy": run.dissipated_energy,
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
+        **{f"scales_{k}": v for k, v in scales.items()},
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
@@ -142,9 +221,15 @@ def _experiment(config, tables: dict[str, Any]):
                 "keyword tables are for a config given as a dict, not a file: "
                 + ", ".join(sorted(tables))])
         return load_experiment(config)
+    import yaml
+
     data = {"name": "api", **(dict(config) if config is not None else {}), **tables}
-    # JSON is YAML: the experiment is parsed, checked and stored as an experiment file is
-    return parse_experiment(json.dumps(data, indent=1, default=_plain), "yaml", "<simulate>")
+    # written as YAML (numpy values as plain numbers and lists), then parsed, checked and
+    # stored as an experiment file is; PyYAML writes 1e-06 as 1.0e-06, which YAML 1.1
+    # reads back as a number (JSON's 1e-06 it would read as text)
+    plain = json.loads(json.dumps(data, default=_plain))
+    text = yaml.safe_dump(plain, sort_keys=False, default_flow_style=None, width=88)
+    return parse_experiment(text, "yaml", "<simulate>")
 
 
 def _plain(value):

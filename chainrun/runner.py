@@ -81,7 +81,7 @@ class RunSummary:
     message: str
     final_velocity: np.ndarray
     skipped: bool = False
-    dissipated: float = 0.0  # share of the initial kinetic energy the damping took
+    dissipated: float = 0.0  # share of the impact energy the damping took
 
     def line(self) -> str:
         """One line: how the run ended, its cost and its conservation errors."""
@@ -219,14 +219,16 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         momentum_error=d.momentum_error, energy_error=d.energy_error,
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
-        dissipated=_share(sol.dissipated_energy, line.mass, line.velocity),
+        dissipated=_share(sol.dissipated_energy, line),
     )
 
 
-def _share(dissipated: float, mass, velocity) -> float:
-    """``dissipated`` as a share of the initial kinetic energy (0 without either)."""
-    initial = 0.5 * float(np.sum(np.asarray(mass) * np.asarray(velocity) ** 2))
-    return dissipated / initial if dissipated and initial else 0.0
+def _share(dissipated: float, line) -> float:
+    """``dissipated`` as a share of the line's impact energy (0 without either)."""
+    from chainrun.solver.physics import impact_energy
+
+    impact = impact_energy(line) if dissipated else 0.0
+    return dissipated / impact if impact else 0.0
 
 
 def read_summary(path, spec: RunSpec) -> RunSummary:
@@ -248,8 +250,7 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
-        dissipated=_share(run.dissipated_energy, run.model["mass"], run.model["velocity"])
-        if run.model is not None else 0.0,
+        dissipated=_share(run.dissipated_energy, run.line),
     )
 
 

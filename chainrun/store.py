@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
+import functools
 import json
 import os
 import re
@@ -45,7 +46,7 @@ import numpy as np
 import chainrun
 from chainrun import atomic
 from chainrun.errors import StoreError
-from chainrun.solver import EventKind, Solution
+from chainrun.solver import EventKind, Line, Solution, Wall
 from chainrun.solver import physics
 from chainrun.units import UNITS
 
@@ -69,11 +70,14 @@ __all__ = [
 
 #: Format name and version of a run file (root attributes ``format``, ``format_version``).
 RUN_FORMAT = "chainrun-run"
-RUN_FORMAT_VERSION = 1
+RUN_FORMAT_VERSION = 2
 #: Format name and version of an experiment's index file.
 INDEX_FORMAT = "chainrun-index"
 INDEX_FORMAT_VERSION = 1
 _FORMAT_VERSIONS = {RUN_FORMAT: RUN_FORMAT_VERSION, INDEX_FORMAT: INDEX_FORMAT_VERSION}
+#: The versions each format is still read in: a run file of version 1 numbers its event
+#: log's contacts from 0 and keeps the walls' impulses and dissipation as attributes.
+_READABLE = {RUN_FORMAT: (1, 2), INDEX_FORMAT: (1,)}
 
 #: H5MD specification version the run files conform to (major, minor).
 H5MD_VERSION = (1, 1)
@@ -388,10 +392,11 @@ def _check_open(h5: h5py.File, name: str, expected: str) -> int:
         # absent, or not an integer: "1", 1.5 or [1] are not version 1
         raise StoreError(f"{name}: {fmt} file without a valid format_version")
     version = int(raw_version)
-    supported = _FORMAT_VERSIONS[expected]
-    if version != supported:
+    readable = _READABLE[expected]
+    if version not in readable:
+        known = " or ".join(str(v) for v in readable)
         raise StoreError(
-            f"{name}: format version {version} is not supported (expected {supported})"
+            f"{name}: format version {version} is not supported (expected {known})"
         )
     return version
 
@@ -696,12 +701,13 @@ class RunWriter:
                 raise StoreError(f"{self.path}: {name} has shape {data.shape}, expected ({n},)")
             ds = _array(results, name, data, [ball], long_name)
             ds.attrs["unit"] = UNITS[self._units][name.split("_")[1]]
-        if sol.line is not None and sol.line.is_damped:
-            self._write_dissipation(h5, results, sol)
-        if sol.line is not None and (sol.line.left or sol.line.right):
-            for side, value in zip(("left", "right"), sol.wall_impulse):
-                results.attrs[f"{side}_wall_impulse"] = np.float64(value)
-            results.attrs["wall_impulse_unit"] = UNITS[self._units]["momentum"]
+        wall = _scale(results, "wall", np.array(["left", "right"], dtype=h5py.string_dtype()),
+                      "the wall at each end: left (before ball 1), right (after ball N)")
+        self._write_dissipation(h5, results, sol, wall)
+        ds = _array(results, "wall_impulse", np.asarray(sol.wall_impulse, dtype=np.float64),
+                    [wall], "impulse each wall gave the line by end_time (+x towards ball "
+                    "N; 0 where there is no wall)")
+        ds.attrs["unit"] = UNITS[self._units]["momentum"]
         results.attrs["end_time"] = np.float64(sol.end_time)
         results.attrs["terminal"] = np.bool_(sol.terminal)
         results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
@@ -718,9 +724,11 @@ class RunWriter:
                        "event number, in time order")
         _array(events, "time", t, [event], "time of the event").attrs["unit"] = \
             UNITS[self._units]["time"]
-        c = _array(events, "contact", contact, [event],
-                   "contact j (0-based) joins balls j+1 and j+2 (ball numbers 1..N)")
-        c.attrs["base"] = np.int64(0)
+        # the solver's arrays count contacts from 0 (and the left wall as -1); the file
+        # numbers them as it numbers balls: contact j joins balls j and j+1
+        c = _array(events, "contact", contact + 1, [event],
+                   "contact j joins balls j and j+1 (0: the left wall, N: the right wall)")
+        c.attrs["base"] = np.int64(1)
         k = _array(events, "kind", kind, [event], "what happened to the contact")
         k.attrs["kinds"] = json.dumps({str(int(e)): e.name.lower() for e in EventKind})
         k.attrs["flag_values"] = np.array([int(e) for e in EventKind], dtype=np.int8)
@@ -745,28 +753,35 @@ class RunWriter:
                    "mean of the two contact forces: what a sensor inside the ball measures")
             sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
 
-    def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution) -> None:
-        """What a damped line dissipated: by each snapshot (an observable beside the
-        energies), in total, and by each contact and wall."""
-        energy = UNITS[self._units]["energy"]
+    def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution,
+                           wall: h5py.Dataset) -> None:
+        """What the damping dissipated (0 on an elastic line): by each snapshot (an
+        observable beside the energies), in total, and by each contact and wall."""
+        n, energy = self._n, UNITS[self._units]["energy"]
         times = np.asarray(sol.times, dtype=np.float64)
         element = _Element(h5["observables"], "dissipated_energy", (), [],
                            len(times), "energy dissipated by the damping since t = 0")
-        for i, (t, d) in enumerate(zip(times, sol.dissipated)):
+        dissipated = np.asarray(sol.dissipated, dtype=np.float64)
+        if dissipated.size != times.size:  # an elastic line: nothing was dissipated
+            dissipated = np.zeros(times.size)
+        for i, (t, d) in enumerate(zip(times, dissipated)):
             element.append(i, float(t), float(d))
         element.flush()
         element.value.attrs["unit"] = energy
         element.time.attrs["unit"] = UNITS[self._units]["time"]
         results.attrs["dissipated_energy"] = np.float64(sol.dissipated_energy)
         results.attrs["dissipated_energy_unit"] = energy
-        contact = _scale(results, "contact", np.arange(1, self._n, dtype=np.int64),
+        contact = _scale(results, "contact", np.arange(1, n, dtype=np.int64),
                          "contact j = 1..N-1 joins balls j and j+1")
-        ds = _array(results, "contact_dissipation",
-                    np.asarray(sol.contact_dissipation, dtype=np.float64), [contact],
-                    "energy each contact dissipated by end_time")
+        per = np.asarray(sol.contact_dissipation, dtype=np.float64)
+        ds = _array(results, "contact_dissipation", per if per.size else np.zeros(n - 1),
+                    [contact], "energy each contact dissipated by end_time")
         ds.attrs["unit"] = energy
-        for side, value in zip(("left", "right"), sol.wall_dissipation):
-            results.attrs[f"{side}_wall_dissipation"] = np.float64(value)
+        ds = _array(results, "wall_dissipation",
+                    np.asarray(sol.wall_dissipation, dtype=np.float64),
+                    [wall], "energy each wall dissipated by end_time (0 where there is "
+                    "no wall)")
+        ds.attrs["unit"] = energy
 
     def abort(self) -> None:
         """Close and delete the temporary file; nothing is written under ``path``."""
@@ -875,12 +890,13 @@ class RunData:
     positions, velocities : Snapshots, shape (T, N)
         Read lazily; ``np.asarray`` loads all.
     observables : dict of ndarray, shape (T,)
-        ``kinetic_energy``, ``potential_energy``, ``momentum`` at each snapshot, and on
-        a damped line ``dissipated_energy``, the energy the damping took by then.
+        ``kinetic_energy``, ``potential_energy``, ``momentum`` and
+        ``dissipated_energy`` (the energy the damping took by then; 0 on an elastic
+        line) at each snapshot.
     final_position, final_velocity, separation_time, separation_velocity : ndarray, shape (N,)
     event_time : ndarray, shape (E,)
     event_contact : ndarray of int64, shape (E,)
-        Contact j (0-based) joins balls j+1 and j+2.
+        Contact j joins balls j and j+1 (1..N-1; 0 is the left wall, N the right).
     event_kind : ndarray of int8, shape (E,)
         ``chainrun.solver.EventKind`` values.
     outcome : str
@@ -906,8 +922,8 @@ class RunData:
         Contact forces on each side of each sensor ball at each sample time.
     dissipated_energy : float
         The energy the damping dissipated by ``end_time`` (0 for an elastic line).
-    contact_dissipation : ndarray, shape (N-1,), or None
-        The same by each contact (None for an elastic line).
+    contact_dissipation : ndarray, shape (N-1,)
+        The same by each contact.
     wall_dissipation : ndarray, shape (2,)
         The same by the left and right walls.
     wall_impulse : ndarray, shape (2,)
@@ -943,13 +959,25 @@ class RunData:
     sensor_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0, 2)))
     model: dict[str, Any] | None = None
     dissipated_energy: float = 0.0
-    contact_dissipation: np.ndarray | None = None
+    contact_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     wall_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
     wall_impulse: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
 
     @property
     def n(self) -> int:
         return self.parameters["n"]
+
+    @functools.cached_property
+    def line(self) -> Line:
+        """The line as solved (``chainrun.solver.Line``), rebuilt from ``model``: the
+        paper's line of N, K and alpha in a file without one."""
+        model = self.model
+        if model is None:
+            return Line.paper(self.n, self.k, self.alpha)
+        walls = {side: Wall(**wall) for side, wall in model["walls"].items()}
+        return Line(**{key: model[key] for key in (
+            "mass", "stiffness", "alpha", "gap", "velocity", "force", "position",
+            "damping", "damping_exponent", "diameter", "material")}, **walls)
 
     @property
     def units(self) -> str:
@@ -1046,8 +1074,10 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
     steps = _get(pos, "step")[()]
     shape = _get(pos, "value").shape[:2]
     observables = {name: _get(h5, f"observables/{name}/value")[()] for name in OBSERVABLES}
-    if "dissipated_energy" in h5["observables"]:  # a damped line's
-        observables["dissipated_energy"] = _get(h5, "observables/dissipated_energy/value")[()]
+    # every line's since version 2; a damped line's only before
+    observables["dissipated_energy"] = (
+        _get(h5, "observables/dissipated_energy/value")[()]
+        if "dissipated_energy" in h5["observables"] else np.zeros(times.shape))
     res = _get(h5, "results")
     ev = _get(h5, "events")
     diag = _get(h5, "diagnostics")
@@ -1067,7 +1097,7 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         separation_time=_get(res, "separation_time")[()],
         separation_velocity=_get(res, "separation_velocity")[()],
         event_time=_get(ev, "time")[()],
-        event_contact=_get(ev, "contact")[()],
+        event_contact=_get(ev, "contact")[()] + (1 if version == 1 else 0),
         event_kind=_get(ev, "kind")[()],
         outcome=_as_str(_attr(res, "outcome")),
         message=_as_str(_attr(res, "message")),
@@ -1076,20 +1106,26 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
         model=_read_model(h5),
         **_read_sensors(h5),
-        **_read_dissipation(res),
-        wall_impulse=np.array([float(res.attrs.get(f"{side}_wall_impulse", 0.0))
-                               for side in ("left", "right")]),
+        **_read_walls(res, int(params["n"]), version),
     )
 
 
-def _read_dissipation(res: h5py.Group) -> dict:
-    """What a damped line dissipated (optional: elastic lines have none)."""
-    if "dissipated_energy" not in res.attrs:
-        return {}
-    return dict(dissipated_energy=float(res.attrs["dissipated_energy"]),
-                contact_dissipation=_get(res, "contact_dissipation")[()],
-                wall_dissipation=np.array([float(res.attrs.get(f"{side}_wall_dissipation", 0.0))
-                                           for side in ("left", "right")]))
+def _read_walls(res: h5py.Group, n: int, version: int) -> dict:
+    """What the damping dissipated, by contact and wall, and the walls' impulses (in a
+    version 1 file, attributes present only where there was a wall or damping)."""
+    if version >= 2:
+        return dict(dissipated_energy=float(_attr(res, "dissipated_energy")),
+                    contact_dissipation=_get(res, "contact_dissipation")[()],
+                    wall_dissipation=_get(res, "wall_dissipation")[()],
+                    wall_impulse=_get(res, "wall_impulse")[()])
+    sides = ("left", "right")
+    return dict(
+        dissipated_energy=float(res.attrs.get("dissipated_energy", 0.0)),
+        contact_dissipation=(_get(res, "contact_dissipation")[()]
+                             if "contact_dissipation" in res else np.zeros(max(n - 1, 0))),
+        wall_dissipation=np.array([float(res.attrs.get(f"{s}_wall_dissipation", 0.0))
+                                   for s in sides]),
+        wall_impulse=np.array([float(res.attrs.get(f"{s}_wall_impulse", 0.0)) for s in sides]))
 
 
 def _read_model(h5: h5py.File) -> dict[str, Any] | None:

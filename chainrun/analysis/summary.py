@@ -1,10 +1,15 @@
 """A run at a glance: what ``chainrun info`` prints, as numbers.
 
-Read from a run file only (``chainrun.store.RunData``), in the conventions of
-``derived``: a ball *rebounds* when its final velocity is negative, is *ejected* when it
-moves forward faster than ``SIGNIFICANT`` (1% of the impact velocity: of the fastest
-initial speed, for a general line), and is *left behind* otherwise; energies are shares
-of the impact energy K/2 (the paper's line only).
+Read from a run file only (``chainrun.store.RunData``), from its own line (masses,
+contacts, walls, forces and damping; ``RunData.line``), in its own units. A ball
+*rebounds* when its final velocity is negative, is *ejected* when it moves forward
+faster than ``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed), and
+is *left behind* otherwise. Energies are shares of the impact energy
+(``chainrun.solver.physics.impact_energy``: K/2 on the paper's line): the kinetic
+energy of the rebounding, ejected and left-behind balls at the end, the energy still
+in the contacts and walls (above the static state a precompressed line starts in,
+less the work of the external forces), and the energy the damping dissipated. They
+add up to 100%, to the run's energy error.
 """
 
 from __future__ import annotations
@@ -17,9 +22,18 @@ import numpy as np
 
 from chainrun.analysis.derived import SIGNIFICANT
 from chainrun.solver import EventKind
-from chainrun.solver.physics import kinetic_energy, potential_energy
+from chainrun.solver.model import strikers
+from chainrun.solver.physics import (
+    baseline_energy,
+    impact_energy,
+    line_kinetic_energy,
+    line_potential_energy,
+)
 
-__all__ = ["RunSummary", "law_name", "summarize"]
+__all__ = ["RunSummary", "describe_line", "law_name", "summarize"]
+
+#: The energy shares, in the order they are shown.
+SHARES = ("rebound", "ejected", "left behind", "contacts", "dissipated")
 
 
 def law_name(alpha: float) -> str:
@@ -28,22 +42,27 @@ def law_name(alpha: float) -> str:
         return "linear"
     if alpha == 1.5:
         return "Hertz"
+    if math.isnan(alpha):
+        return "mixed"
     return f"power {alpha:g}"
 
 
 @dataclass(frozen=True)
 class RunSummary:
-    """The numbers of one run that a person reads first.
+    """The numbers of one run that a person reads first, in the run's ``units``.
 
-    ``fastest`` and ``slowest`` are (ball number, 1-based; final velocity).
-    ``events`` counts the logged events by ``EventKind`` name. ``energy`` holds the
-    shares of the impact energy K/2 carried at the end by the rebounding, ejected and
-    left-behind balls (kinetic), and ``"contacts"`` the share still stored in contacts.
+    ``forward`` and ``backward`` are (ball number, 1-based; final velocity) of the
+    ball with the largest forward (towards ball N) and backward final velocity, or
+    None where no ball moves that way. ``events`` counts the logged events by
+    ``EventKind`` name. ``impact`` is the impact energy and ``energy`` the shares of
+    it (``SHARES``) at the end. ``dissipating`` is the contact (1-based) that
+    dissipated most, 0 for a wall, -1 for an elastic line.
     """
 
     path: str
     creator_version: str
     created: str
+    units: str
     n: int
     k: int
     alpha: float
@@ -56,94 +75,108 @@ class RunSummary:
     steps: int
     rejected_steps: int
     max_window: int
-    closed_form: int  # isolated collisions taken whole (0 in older files)
+    closed_form: int
     wall_time: float
     momentum_error: float
     energy_error: float
     energy_correction: float
-    fastest: tuple[int, float]
-    slowest: tuple[int, float]
+    speed: float
+    forward: tuple[int, float] | None
+    backward: tuple[int, float] | None
     rebounding: int
     ejected: int
     left_behind: int
+    impact: float
     energy: dict[str, float]
+    dissipating: int
     snapshots: int
     sensors: int
     samples: int
     first_time: float
     last_time: float
     file_bytes: int
-    model: str = ""  # the general line in brief ("" for the paper's line)
-    dissipated: float = 0.0  # energy the damping took (0: elastic)
-    dissipated_share: float = 0.0  # ... as a share of the initial kinetic energy
-    dissipating: int = 0  # the contact (1-based) that dissipated most; 0: a wall or none
+    line: str
+
+    @property
+    def dissipated(self) -> float:
+        """The energy the damping took (0 on an elastic line)."""
+        return self.energy["dissipated"] * self.impact if self.impact else 0.0
 
 
-def _span(a: np.ndarray, unit: str) -> str:
-    """``"1"``, or ``"0.5 ... 2 kg"`` for values that differ."""
-    unit = f" {unit}" if unit and unit != "1" else ""
+def _span(a: np.ndarray, fmt) -> str:
+    """``"1"``, or ``"0.5 ... 2"`` for values that differ, each by ``fmt``."""
+    a = np.asarray(a)
     if a.size == 0:
         return "none"
-    lo, hi = float(np.min(a)), float(np.max(a))
-    return f"{lo:.4g}{unit}" if lo == hi else f"{lo:.4g} ... {hi:.4g}{unit}"
+    lo, hi = a.min(), a.max()
+    return fmt(lo) if lo == hi else f"{fmt(lo)} ... {fmt(hi)}"
 
 
-def describe_model(model: dict | None) -> str:
-    """A line for a person: the masses, contacts, walls, forces and units of a run's
-    line (``RunData.model``); "" for the paper's line, which N, K and alpha say whole."""
-    if not model:
+def describe_line(line, units: str) -> str:
+    """The line for a person, in brief: its spheres (material and diameter) or masses,
+    contacts, gaps, forces, damping and walls; "" for the paper's line, which N, K and
+    alpha say whole."""
+    from chainrun.units import format_value
+
+    if line.is_paper and units != "si":
         return ""
-    si = model["units"] == "si"
-    mass, stiffness, alpha = model["mass"], model["stiffness"], model["alpha"]
-    paper = (not si and np.all(mass == 1.0) and np.all(stiffness == 1.0)
-             and not np.any(model["gap"]) and not np.any(model["force"])
-             and not model["walls"] and np.all(np.isin(model["velocity"], (0.0, 1.0)))
-             and np.all(alpha == alpha[:1]) and not np.any(model["damping"]))
-    if paper:
-        return ""
-    parts = [f"masses {_span(mass, 'kg' if si else '')}",
-             f"stiffness {_span(stiffness, 'N/m^alpha' if si else '')}",
-             f"alpha {_span(alpha, '')}"]
-    if np.any(model["gap"]):
-        parts.append(f"gaps {_span(model['gap'], 'm' if si else '')}")
-    if np.any(model["force"]):
-        parts.append(f"forces on {int(np.count_nonzero(model['force']))} balls")
-    if np.any(model["damping"]):
-        parts.append(f"damping {_span(model['damping'], '')} "
-                     f"(exponent {_span(model['damping_exponent'], '')})")
-    walls = [f"{side} (stiffness {w['stiffness']:.4g}, alpha {w['alpha']:g}, gap {w['gap']:g}"
-             + (f", damping {w['damping']:.4g}" if w.get("damping") else "") + ")"
-             for side, w in model["walls"].items()]
+
+    def quantity(name):
+        return lambda x: format_value(float(x), name, units)
+
+    parts = []
+    if line.diameter is not None:
+        names = sorted(set(np.asarray(line.material).tolist()) - {""}) or ["given constants"]
+        parts.append(f"{', '.join(n.replace('_', ' ') for n in names)} spheres of "
+                     f"{_span(line.diameter, quantity('diameter'))}")
+    parts.append(f"masses {_span(line.mass, quantity('mass'))}")
+    if line.n > 1:
+        alpha = _span(line.alpha, lambda x: f"{x:g}")
+        unit = (f" N/m^{alpha}" if " " not in alpha else " N/m^alpha") if units == "si" else ""
+        parts.append(f"stiffness {_span(line.stiffness, lambda x: f'{x:.4g}')}{unit}, "
+                     f"alpha {alpha}")
+    if np.any(line.gap):
+        parts.append(f"gaps {_span(line.gap, quantity('gap'))}")
+    if np.any(line.force):
+        parts.append(f"forces on {int(np.count_nonzero(line.force))} balls, "
+                     f"{_span(line.force[line.force != 0], quantity('force'))}")
+    if np.any(line.damping):
+        parts.append(f"damping {_span(line.damping, lambda x: f'{x:.4g}')} "
+                     f"(exponent {_span(line.damping_exponent, lambda x: f'{x:g}')})")
+    walls = [f"{side} (stiffness {w.stiffness:.4g}, alpha {w.alpha:g}"
+             + (f", gap {format_value(w.gap, 'gap', units)}" if w.gap else "")
+             + (f", damping {w.damping:.4g}" if w.damping else "") + ")"
+             for side, w in (("left", line.left), ("right", line.right)) if w is not None]
     parts.append("walls: " + (", ".join(walls) if walls else "none"))
-    v = model["velocity"]
-    parts.append(f"initial speeds {_span(v[v != 0], 'm/s' if si else '')}")
-    return "; ".join(parts) + ("; SI units" if si else "; paper units")
+    return "; ".join(parts)
 
 
 def summarize(run) -> RunSummary:
     """The summary of a run (``chainrun.store.RunData``)."""
+    line = run.line
     v = np.asarray(run.final_velocity, dtype=float)
-    k = run.k
-    impact = 0.5 * k
-    # "ejected": faster than 1% of the impact velocity, the fastest initial speed of a
-    # general line (in its units)
-    speed = (float(np.max(np.abs(run.model["velocity"]))) if run.model is not None
-             else 1.0) or 1.0
-    back, ahead = v < 0.0, v > SIGNIFICANT * speed
+    speed = float(np.max(np.abs(line.velocity))) if line.n else 0.0
+    back, ahead = v < 0.0, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
-    kinetic = {name: float(kinetic_energy(v[mask])) / impact
+    impact = impact_energy(line)
+    stored = float(line_potential_energy(run.final_position, line)) - baseline_energy(line)
+    amounts = {name: float(line_kinetic_energy(np.where(mask, v, 0.0), line.mass))
                for name, mask in (("rebound", back), ("ejected", ahead),
                                   ("left behind", behind))}
-    stored = float(potential_energy(run.final_position, run.alpha)) / impact
+    amounts |= {"contacts": stored, "dissipated": float(run.dissipated_energy)}
+    energy = {name: (amount / impact if impact else math.nan)
+              for name, amount in amounts.items()}
     kinds = np.asarray(run.event_kind)
     d = run.diagnostics
     return RunSummary(
         path=str(run.path),
         creator_version=run.creator_version,
         created=run.created,
+        units=run.units,
         n=run.n,
-        k=k,
-        alpha=run.alpha,
+        k=strikers(line),
+        alpha=float(line.alpha[0]) if line.n > 1 and np.all(line.alpha == line.alpha[0])
+        else (math.nan if line.n > 1 else run.alpha),
         rtol=float(run.parameters["rtol"]),
         outcome=run.outcome,
         message=run.message,
@@ -158,33 +191,29 @@ def summarize(run) -> RunSummary:
         momentum_error=float(d["momentum_error"]),
         energy_error=float(d["energy_error"]),
         energy_correction=float(d["energy_correction"]),
-        fastest=(int(np.argmax(v)) + 1, float(v.max())),
-        slowest=(int(np.argmin(v)) + 1, float(v.min())),
+        speed=speed,
+        forward=(int(np.argmax(v)) + 1, float(v.max())) if v.size and v.max() > 0 else None,
+        backward=(int(np.argmin(v)) + 1, float(v.min())) if v.size and v.min() < 0 else None,
         rebounding=int(back.sum()),
         ejected=int(ahead.sum()),
         left_behind=int(behind.sum()),
-        energy={**kinetic, "contacts": stored},
+        impact=impact,
+        energy=energy,
+        dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),
         samples=int(run.sensor_time.size),
-        first_time=float(run.times[0]) if run.times.size else float("nan"),
-        last_time=float(run.times[-1]) if run.times.size else float("nan"),
+        first_time=float(run.times[0]) if run.times.size else math.nan,
+        last_time=float(run.times[-1]) if run.times.size else math.nan,
         file_bytes=os.path.getsize(run.path),
-        model=describe_model(getattr(run, "model", None)),
-        **_dissipation(run),
+        line=describe_line(line, run.units),
     )
 
 
-def _dissipation(run) -> dict:
-    """What the damping took, as a share of the initial kinetic energy, and where."""
-    energy = float(getattr(run, "dissipated_energy", 0.0))
-    if not energy:
-        return {}
-    model = run.model
-    initial = 0.5 * float(np.sum(model["mass"] * model["velocity"] ** 2))
-    per = run.contact_dissipation
-    most = int(np.argmax(per)) + 1 if per is not None and per.size else 0
-    if per is not None and per.size and np.max(run.wall_dissipation) > per[most - 1]:
-        most = 0
-    return dict(dissipated=energy, dissipated_share=energy / initial if initial else math.nan,
-                dissipating=most)
+def _most_dissipating(run) -> int:
+    """The contact (1-based) that dissipated most, 0 for a wall, -1 if none did."""
+    per, walls = np.asarray(run.contact_dissipation), np.asarray(run.wall_dissipation)
+    best = float(per.max()) if per.size else 0.0
+    if max(best, float(walls.max(initial=0.0))) <= 0.0:
+        return -1
+    return 0 if float(walls.max(initial=0.0)) > best else int(np.argmax(per)) + 1

@@ -1,44 +1,81 @@
-"""``chainrun info``: what a run file holds, read in ten seconds."""
+"""``chainrun info``: what a run file holds, read in ten seconds, in the run's units."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
+import numpy as np
 
 from chainrun.cli.common import fail
 from chainrun.errors import ChainrunError
 
+_EVENT_NAMES = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
+                "ENGAGE": "engagements", "UNLOAD": "unloadings (a damped force at 0)",
+                "RELOAD": "reloadings"}
+_SHARE_NAMES = {"rebound": "rebound", "ejected": "ejected", "left behind": "left behind",
+                "contacts": "in contacts and walls", "dissipated": "dissipated"}
+
+
 def _events(counts: dict[str, int]) -> str:
-    names = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
-             "ENGAGE": "engagements", "UNLOAD": "unloadings (a damped force at 0)",
-             "RELOAD": "reloadings"}
     total = sum(counts.values())
-    parts = [f"{counts[key]} {name}" for key, name in names.items() if counts.get(key)]
+    parts = [f"{counts[key]} {name}" for key, name in _EVENT_NAMES.items() if counts.get(key)]
     return f"{total} events" + (f" ({', '.join(parts)})" if parts else "")
 
 
+def _ball(which: str, pick, s) -> str:
+    from chainrun.units import format_value
+
+    if pick is None:
+        return f"no ball moves {which}"
+    return f"ball {pick[0]} at {format_value(pick[1], 'velocity', s.units, 6)}"
+
+
+def _shares(s) -> str:
+    from chainrun.units import format_value
+
+    if not math.isfinite(s.energy["rebound"]):
+        return "no impact energy to share (the line starts at rest)"
+    shares = ", ".join(f"{_SHARE_NAMES[name]} {share:.2%}" for name, share in s.energy.items()
+                       if name != "dissipated" or share)
+    return f"of the impact energy {format_value(s.impact, 'energy', s.units)}: {shares}"
+
+
 def render(s) -> str:
-    """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text."""
+    """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text, in the
+    run's units."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
     from chainrun.runner import momentum_text
+    from chainrun.units import format_value
+
+    def t(x):
+        return format_value(x, "time", s.units, 6)
 
     if s.terminal:
-        outcome = f"terminal state at t = {s.end_time:.6g}: no collision can happen again"
+        outcome = f"terminal state at t = {t(s.end_time)}: no collision can happen again"
     elif s.outcome == "stop_time":
-        outcome = f"stopped at t_end = {s.end_time:.6g} (not the terminal state)"
+        outcome = f"stopped at t_end = {t(s.end_time)} (not the terminal state)"
     else:
         outcome = f"FAILED ({s.outcome}): {s.message}"
-    share = s.energy
+    speed = format_value(s.speed, "velocity", s.units)
+    striking = (f"the first K = {s.k} striking at "
+                + (speed if s.units == "si" else f"velocity {speed}") if s.k else "none striking")
+    units = "SI units" if s.units == "si" else "paper units"
     stored = (f"{s.snapshots} snapshots of positions and velocities, t = "
-              f"{s.first_time:.6g} ... {s.last_time:.6g}" if s.snapshots else "no snapshots")
+              f"{t(s.first_time)} ... {t(s.last_time)}" if s.snapshots else "no snapshots")
+    threshold = format_value(0.01 * (s.speed or 1.0), "velocity", s.units)
+    damping = []
+    if s.dissipating >= 0:
+        where = f"at contact {s.dissipating}" if s.dissipating else "at a wall"
+        damping = [f"damping   dissipated {format_value(s.dissipated, 'energy', s.units)}, "
+                   f"most {where}"]
     lines = [
         f"{s.path}  ({human_size(s.file_bytes)}, chainrun {s.creator_version}, {s.created})",
-        (f"model     N = {s.n} balls, the first K = {s.k} striking" if s.model else
-         f"model     N = {s.n} balls, the first K = {s.k} striking at velocity 1; "
-         f"{law_name(s.alpha)} contacts (alpha = {s.alpha:g}); paper units"),
-        *([f"line      {s.model}"] if s.model else []),
+        f"model     N = {s.n} balls, {striking}; {law_name(s.alpha)} contacts"
+        + (f" (alpha = {s.alpha:g})" if math.isfinite(s.alpha) else "") + f"; {units}",
+        *([f"line      {s.line}"] if s.line else []),
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "
         f"at most {s.max_window} balls integrated at once, {s.wall_time:.2f} s",
@@ -46,44 +83,86 @@ def render(s) -> str:
           if s.closed_form else []),
         f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
-        f"balls     fastest: ball {s.fastest[0]} at {s.fastest[1]:.6g}; slowest: ball "
-        f"{s.slowest[0]} at {s.slowest[1]:.6g}",
+        f"balls     largest forward velocity: {_ball('forward', s.forward, s)}; "
+        f"largest backward velocity: {_ball('backward', s.backward, s)}",
         f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 1% of the "
-        f"impact speed), "
-        f"{s.left_behind} left behind",
-        *([] if s.model else [  # shares of K/2: the paper's line only
-            f"energy    of the impact energy K/2: rebound {share['rebound']:.2%}, ejected "
-            f"{share['ejected']:.2%}, left behind {share['left behind']:.2%}, in contacts "
-            f"{share['contacts']:.2%}"]),
-        *([f"damping   dissipated {s.dissipated:.6g} ({s.dissipated_share:.2%} of the initial "
-             f"kinetic energy), most "
-             + (f"at contact {s.dissipating}" if s.dissipating else "at a wall")]
-          if s.dissipated else []),
+        f"impact speed, {threshold}), {s.left_behind} left behind",
+        f"energy    {_shares(s)}",
+        *damping,
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
     ]
     return "\n".join(lines)
 
 
-def _row(s) -> str:
-    state = f"t = {s.end_time:.6g}" if s.outcome in ("terminal", "stop_time") else s.outcome
-    return (f"{Path(s.path).name:<20} {s.n:>8} {s.k:>4} {s.alpha:>6g} {s.outcome:<10} "
-            f"{state:<16} {sum(s.events.values()):>8} {s.fastest[1]:>10.6g} "
-            f"{s.slowest[1]:>10.6g}")
+#: The numbers of a run that an ensemble averages: (label, quantity, value of a summary)
+_ENSEMBLE = (
+    ("end time", "time", lambda s: s.end_time),
+    ("events", None, lambda s: sum(s.events.values())),
+    ("rebound (balls)", None, lambda s: s.rebounding),
+    ("ejected (balls)", None, lambda s: s.ejected),
+    ("left behind (balls)", None, lambda s: s.left_behind),
+    ("largest forward velocity", "velocity", lambda s: s.forward[1] if s.forward else 0.0),
+    ("largest backward velocity", "velocity",
+     lambda s: s.backward[1] if s.backward else 0.0),
+    *((f"energy {_SHARE_NAMES[name]} (%)", None,
+       (lambda name: lambda s: 100.0 * s.energy[name])(name))
+      for name in ("rebound", "ejected", "left behind", "contacts", "dissipated")),
+)
+
+
+def render_folder(path: Path, summaries) -> str:
+    """An output folder of several runs: a line per run, then the mean and standard
+    deviation of each summary number over the runs (an ensemble's statistics)."""
+    from chainrun.units import scale_for
+
+    units = summaries[0].units
+    time = scale_for("time", units, [s.end_time for s in summaries])
+    speed = scale_for("velocity", units, [s.forward[1] if s.forward else 0.0
+                                           for s in summaries])
+    head = (f"{'file':<24} {'N':>7} {'K':>4} {'outcome':<10} {'end (' + time.unit + ')':>14} "
+            f"{'events':>8} {'forward (' + speed.unit + ')':>16}")
+    lines = [f"{path}: {len(summaries)} runs", head]
+    for s in summaries:
+        forward = s.forward[1] if s.forward else 0.0
+        lines.append(f"{Path(s.path).name:<24} {s.n:>7} {s.k:>4} {s.outcome:<10} "
+                     f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
+                     f"{speed(forward):>16.6g}")
+    if len({s.units for s in summaries}) > 1:
+        return "\n".join(lines + ["(runs in different units: no statistics)"])
+    lines += ["", f"over the {len(summaries)} runs: mean +- standard deviation "
+                  "(min ... max)"]
+    for label, quantity, value in _ENSEMBLE:
+        x = np.array([value(s) for s in summaries], dtype=float)
+        sd = float(np.std(x, ddof=1)) if x.size > 1 else math.nan
+        if quantity is None:
+            unit, (mean, sd, lo, hi) = "", (x.mean(), sd, x.min(), x.max())
+        else:
+            scaled = scale_for(quantity, units, [x.min(), x.max()])
+            unit = f" {scaled.unit}"
+            mean, sd, lo, hi = scaled([x.mean(), sd, x.min(), x.max()])
+        digits = ".2f" if label.endswith("(%)") else ".4g"
+        lines.append(f"  {label:<34} {mean:{digits}} +- {sd:{digits}}{unit} "
+                     f"({lo:{digits}} ... {hi:{digits}})")
+    return "\n".join(lines)
 
 
 @click.command()
 @click.argument("paths", nargs=-1, required=True,
                 type=click.Path(exists=True, path_type=Path))
 def info(paths: tuple[Path, ...]):
-    """Summarise the run files PATHS, or every run of output folders PATHS.
+    """Summarise the run files PATHS, or every run of output folders PATHS, in each
+    run's own units.
 
-    For a run file: the model, how the run ended and when, its events, steps and cost,
-    its conservation errors, the fastest and slowest balls, how many balls rebound, are
-    ejected (moving forward faster than 1% of the impact velocity) or are left behind,
-    how the impact energy is shared among them, and what the file stores. For an output
-    folder (a sweep, with its index.h5): one line per run, and the full summary when
-    the folder holds a single run.
+    For a run file: the line (its spheres, masses, contacts, walls, damping), how the
+    run ended and when, its events, steps and cost, its conservation errors, the
+    balls with the largest forward and backward velocities, how many balls rebound,
+    are ejected (moving forward faster than 1% of the impact speed) or are left
+    behind, how the impact energy is shared among them, the contacts and walls and
+    the damping, and what the file stores. For an output folder (a sweep or an
+    ensemble of seeds, with its index.h5): one line per run, then the mean, standard
+    deviation and range of each number over the runs; the full summary when the
+    folder holds a single run.
 
     \b
     Examples:
@@ -106,12 +185,8 @@ def info(paths: tuple[Path, ...]):
                 summaries = [summarize(read_run(path / str(r["file"]))) for r in rows]
                 if len(summaries) == 1:
                     click.echo(render(summaries[0]))
-                    continue
-                click.echo(f"{path}: {len(summaries)} runs")
-                click.echo(f"{'file':<20} {'N':>8} {'K':>4} {'alpha':>6} {'outcome':<10} "
-                           f"{'end':<16} {'events':>8} {'fastest':>10} {'slowest':>10}")
-                for s in summaries:
-                    click.echo(_row(s))
+                else:
+                    click.echo(render_folder(path, summaries))
             else:
                 click.echo(render(summarize(read_run(path))))
     except ChainrunError as exc:

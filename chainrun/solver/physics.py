@@ -135,3 +135,22 @@ def line_potential_energy(x: np.ndarray, line) -> np.ndarray:
         w = line.right
         total = total + _law_energy(x[..., -1] - w.gap, w.stiffness, w.alpha)
     return total - x @ line.force
+
+
+def baseline_energy(line) -> float:
+    """Potential energy of the state a line rests in before it is struck: that of its
+    initial positions where it starts at a static equilibrium (precompressed: the
+    positions are not all 0), else 0."""
+    if not np.any(line.position):
+        return 0.0
+    return float(line_potential_energy(line.position, line))
+
+
+def impact_energy(line) -> float:
+    """The energy an impact puts into ``line``: its initial kinetic energy, plus the
+    energy of any initial overlap (its potential energy at t = 0 above
+    ``baseline_energy``). K/2 for the paper's line. Every energy share chainrun reports
+    is a share of this."""
+    start = float(line_kinetic_energy(line.velocity, line.mass)
+                  + line_potential_energy(line.position, line))
+    return start - baseline_energy(line)

@@ -50,7 +50,8 @@ def test_open_run_reads_the_file(cradle_file):
         x = f["particles/chain/position/value"][:, :, 0]
         v = f["results/final_velocity"][()]
         t = f["events/time"][()]
-    assert dict(ds.sizes) == {"time": 21, "ball": 5, "event": t.size}
+    assert dict(ds.sizes) == {"time": 21, "ball": 5, "contact": 4, "wall": 2,
+                              "event": t.size}
     np.testing.assert_array_equal(ds.position.values, x)
     np.testing.assert_array_equal(ds.final_velocity.values, v)
     np.testing.assert_array_equal(ds.event_time.values, t)
@@ -98,3 +99,40 @@ def test_import_chainrun_is_light():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "False"]
+
+
+def test_the_dataset_holds_the_whole_line_numbered_one_way(tmp_path):
+    """Per ball, per contact and per wall, every number of the line and what it did,
+    in SI units; contacts numbered from 1 in the event log as along ``contact``."""
+    ds = chainrun.simulate(
+        name="dimer", units="si",
+        chain={"n": 6, "k": 1, "speed": 0.2, "diameter": [0.01, 0.006] * 3,
+               "material": ["steel", "aluminium"] * 3, "restitution": 0.9,
+               "damping_law": "tsuji"},
+        walls={"right": {"material": "steel", "gap": 1e-6}},
+        output={"times": [0.0, 5e-5, 1e-4]})
+    rho = {"steel": 7850.0, "aluminium": 2700.0}
+    d = np.array([0.01, 0.006] * 3)
+    mass = np.array([rho[m] for m in ["steel", "aluminium"] * 3]) * np.pi * d**3 / 6
+    np.testing.assert_allclose(ds.mass.values, mass, rtol=1e-14)
+    assert ds.mass.attrs["units"] == "kg" and ds.diameter.attrs["units"] == "m"
+    np.testing.assert_array_equal(ds.diameter.values, d)
+    assert list(ds.material.values) == ["steel", "aluminium"] * 3
+    assert list(ds.contact.values) == [1, 2, 3, 4, 5] and ds.stiffness.dims == ("contact",)
+    assert np.all(ds.damping.values > 0) and np.all(ds.alpha.values == 1.5)
+    assert ds.wall_gap.sel(wall="right").item() == 1e-6
+    assert np.isnan(ds.wall_stiffness.sel(wall="left").item())
+    assert ds.wall_impulse.attrs["units"] == "kg m/s"
+    # the wall's impulse and the line's momentum: P(end) = P(0) + J
+    p0 = float(mass @ ds.initial_velocity.values)
+    assert float(mass @ ds.final_velocity.values) == pytest.approx(
+        p0 + ds.wall_impulse.sum().item(), abs=1e-12 * p0)
+    # energy: kinetic + contact + dissipated = initial, with the walls and damping
+    total = ds.kinetic_energy + ds.potential_energy + ds.dissipated_energy
+    np.testing.assert_allclose(total.values, 0.5 * float(mass @ ds.initial_velocity.values**2),
+                               rtol=1e-10)
+    assert ds.dissipated_energy.attrs["units"] == "J"
+    contacts = set(ds.event_contact.values.tolist())
+    assert contacts <= set(range(0, 7)) and 6 in contacts  # 6 = N: the right wall
+    assert ds.contact_dissipation.sum().item() + ds.wall_dissipation.sum().item() == \
+        pytest.approx(ds.attrs["dissipated_energy"], rel=1e-12)

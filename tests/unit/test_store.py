@@ -92,7 +92,7 @@ def test_root_and_h5md_metadata(run):
     path, _, _ = run
     with h5py.File(path, "r") as f:
         assert f.attrs["format"] == "chainrun-run"
-        assert f.attrs["format_version"] == 1
+        assert f.attrs["format_version"] == 2
         assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\+00:00", f.attrs["created"])
         h5md = f["h5md"]
         assert h5md.attrs["version"].tolist() == [1, 1]
@@ -160,6 +160,7 @@ def test_observables_match_the_formulas(run):
         "kinetic_energy": 0.5 * (v**2).sum(axis=1),
         "potential_energy": (c ** (alpha + 1)).sum(axis=1) / (alpha + 1),
         "momentum": v.sum(axis=1),
+        "dissipated_energy": np.zeros(len(spec.times)),  # an elastic line
     }
     compressions = x[:, :-1] - x[:, 1:]
     assert (compressions > 0).any() and (compressions < 0).any()
@@ -192,7 +193,9 @@ def test_results_events_diagnostics(run):
         assert ev["contact"].dtype == np.int64
         assert ev["kind"].dtype == np.int8
         np.testing.assert_array_equal(ev["time"][:], sol.event_time)
-        np.testing.assert_array_equal(ev["contact"][:], sol.event_contact)
+        # the solver counts contacts from 0; the file as it counts balls, from 1
+        np.testing.assert_array_equal(ev["contact"][:], sol.event_contact + 1)
+        assert ev["contact"].attrs["base"] == 1
         np.testing.assert_array_equal(ev["kind"][:], sol.event_kind)
         kinds = json.loads(ev["kind"].attrs["kinds"])
         assert kinds == {str(int(k)): k.name.lower() for k in EventKind}
@@ -210,7 +213,7 @@ def test_read_run_round_trip(run):
     path, spec, sol = run
     r = store.read_run(path)
     assert (r.n, r.k, r.alpha) == (6, 2, 1.5)
-    assert r.format_version == 1 and r.creator_version == chainrun.__version__
+    assert r.format_version == 2 and r.creator_version == chainrun.__version__
     assert r.parameters["t_end"] is None and r.parameters["max_events"] is None
     assert r.parameters["overrides"] == {"chain.k": 2}
     np.testing.assert_array_equal(r.times, spec.times)
@@ -224,12 +227,17 @@ def test_read_run_round_trip(run):
     np.testing.assert_array_equal(r.velocities[1:3, ::2], sol.velocities[1:3, ::2])
     np.testing.assert_array_equal(r.velocities[::-1, 0], sol.velocities[::-1, 0])
     for name in ("final_velocity", "final_position", "separation_velocity",
-                 "separation_time", "event_time", "event_contact", "event_kind"):
+                 "separation_time", "event_time", "event_kind"):
         np.testing.assert_array_equal(getattr(r, name), getattr(sol, name))
+    np.testing.assert_array_equal(r.event_contact, sol.event_contact + 1)
     assert r.outcome == Outcome.TERMINAL.value and Outcome(r.outcome) is Outcome.TERMINAL
     assert (r.end_time, r.terminal, r.message) == (12.5, True, sol.message)
     assert r.diagnostics["steps"] == 1234 and r.diagnostics["max_window"] == 5
-    assert set(r.observables) == {"kinetic_energy", "potential_energy", "momentum"}
+    assert set(r.observables) == {"kinetic_energy", "potential_energy", "momentum",
+                                  "dissipated_energy"}
+    assert not np.any(r.observables["dissipated_energy"]) and r.dissipated_energy == 0.0
+    np.testing.assert_array_equal(r.contact_dissipation, np.zeros(spec.n - 1))
+    np.testing.assert_array_equal(r.wall_impulse, [0.0, 0.0])
 
 
 def test_every_item_is_in_the_schema_page(run):
@@ -275,7 +283,9 @@ def test_xarray_sees_named_dimensions(run):
             assert tree["events"][name].dims == ("event",)
         assert tree.attrs["format"] == "chainrun-run"
         assert tree["parameters"].attrs["n"] == spec.n
-        named = {"time", "ball", "spatial", "event", "contact"}
+        assert tree["results"]["wall_impulse"].dims == ("wall",)
+        assert list(tree["results"]["wall"].values) == ["left", "right"]
+        named = {"time", "ball", "spatial", "event", "contact", "wall"}
         for node in tree.subtree:
             for var in node.ds.variables.values():
                 assert set(var.dims) <= named, (node.path, var.dims)
@@ -377,7 +387,7 @@ def test_large_arrays_are_chunked_and_compressed(tmp_path):
             np.testing.assert_array_equal(f[f"results/{name}"][:], getattr(sol, name))
         np.testing.assert_array_equal(f["results/ball"][:], np.arange(1, n + 1))
         np.testing.assert_array_equal(f["events/time"][:], sol.event_time)
-        np.testing.assert_array_equal(f["events/contact"][:], sol.event_contact)
+        np.testing.assert_array_equal(f["events/contact"][:], sol.event_contact + 1)
         # the paper's line has one mass, one stiffness, ...: each is the fill value of
         # its dataset and stored nowhere, and reads back as that value
         for name, value in (("mass", 1.0), ("stiffness", 1.0), ("alpha", 1.5),
@@ -447,7 +457,7 @@ def test_finish_replaces_an_existing_file_and_closes_the_writer(tmp_path):
         with pytest.raises(StoreError, match="closed"):
             w.snapshot(9, 9.0, np.zeros(spec.n), np.zeros(spec.n))
     assert list(tmp_path.iterdir()) == [path]
-    assert store.check_format(path) == 1
+    assert store.check_format(path) == 2
 
 
 def test_bad_solution_in_finish_leaves_nothing(tmp_path):
@@ -493,10 +503,10 @@ def one_line_error(func, *args, match):
 
 def test_check_format_accepts_path_and_open_file(run):
     path, _, _ = run
-    assert store.check_format(path) == 1
-    assert store.check_format(str(path), expected="chainrun-run") == 1
+    assert store.check_format(path) == 2
+    assert store.check_format(str(path), expected="chainrun-run") == 2
     with h5py.File(path, "r") as f:
-        assert store.check_format(f) == 1
+        assert store.check_format(f) == 2
 
 
 def test_check_format_rejects_foreign_hdf5(tmp_path):
@@ -527,9 +537,9 @@ def test_check_format_rejects_truncated_and_non_hdf5(run, tmp_path):
 def test_check_format_rejects_a_newer_version(run):
     path, _, _ = run
     with h5py.File(path, "a") as f:
-        f.attrs["format_version"] = np.int64(2)
-    msg = one_line_error(store.read_run, path, match="format version 2")
-    assert msg == f"{path}: format version 2 is not supported (expected 1)"
+        f.attrs["format_version"] = np.int64(3)
+    msg = one_line_error(store.read_run, path, match="format version 3")
+    assert msg == f"{path}: format version 3 is not supported (expected 1 or 2)"
 
 
 def test_run_and_index_formats_are_not_confused(run, tmp_path):

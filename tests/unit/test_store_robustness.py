@@ -149,11 +149,11 @@ def test_format_name_as_bytes_is_accepted(good, tmp_path):
     assert store.read_run(path).n == 5
 
 
-@pytest.mark.parametrize("version", [0, -1, 2, 99, np.uint64(2**64 - 1)])
+@pytest.mark.parametrize("version", [0, -1, 3, 99, np.uint64(2**64 - 1)])
 def test_older_and_newer_versions(good, tmp_path, version):
     path = copy_and(good, tmp_path,
                     lambda h5: h5.attrs.__setitem__("format_version", version))
-    refused(path, f"format version {int(version)} is not supported (expected 1)")
+    refused(path, f"format version {int(version)} is not supported (expected 1 or 2)")
 
 
 @pytest.mark.parametrize("version", ["1", 1.0, 1.5, np.inf, np.nan, np.array([1, 1]),
@@ -192,7 +192,8 @@ GROUPS = ["parameters", "particles", "particles/chain", "particles/chain/positio
 @pytest.mark.parametrize("item", GROUPS)
 def test_missing_groups_and_datasets(good, tmp_path, item):
     path = copy_and(good, tmp_path, lambda h5: h5.__delitem__(item))
-    assert store.check_format(path) == 1  # the format is right, the content is not
+    # the format is right, the content is not
+    assert store.check_format(path) == store.RUN_FORMAT_VERSION
     (message,) = refused(path, "damaged run file (missing ", read=[store.read_run])
     assert item.split("/")[-1] in message
 
@@ -253,3 +254,30 @@ def test_random_damage(good, tmp_path):
             assert len(str(exc).splitlines()) == 1 and str(exc).startswith(f"{path}: ")
         assert store.run_config_hash(path) in (None, "ab" * 32)
     assert refusals > 0
+
+
+def test_a_version_1_file_reads_as_version_2_numbers_it(good, tmp_path):
+    """Version 1 numbered the event log's contacts from 0, kept the walls' impulses as
+    attributes and wrote no dissipation on an elastic line: read, it numbers contacts
+    from 1 like version 2 and gives zeros for what it did not write."""
+    def older(h5):
+        h5.attrs["format_version"] = np.int64(1)
+        contact = h5["events/contact"]
+        contact[...] = contact[()] - 1
+        contact.attrs["base"] = np.int64(0)
+        res = h5["results"]
+        for name in ("wall_impulse", "wall_dissipation", "contact_dissipation"):
+            del res[name]
+        del res["wall"], res["contact"], h5["observables/dissipated_energy"]
+        for name in ("dissipated_energy", "dissipated_energy_unit"):
+            del res.attrs[name]
+        res.attrs["right_wall_impulse"] = -0.25
+
+    now = store.read_run(good)
+    then = store.read_run(copy_and(good, tmp_path, older))
+    assert then.format_version == 1
+    np.testing.assert_array_equal(then.event_contact, now.event_contact)
+    np.testing.assert_array_equal(then.event_contact, [1, 2, 1])  # as make_run logs them
+    np.testing.assert_array_equal(then.wall_impulse, [0.0, -0.25])
+    np.testing.assert_array_equal(then.contact_dissipation, np.zeros(4))
+    np.testing.assert_array_equal(then.observables["dissipated_energy"], np.zeros(4))
