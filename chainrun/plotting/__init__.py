@@ -36,15 +36,32 @@ PDF_METADATA = {"Creator": "chainrun", "Producer": None, "CreationDate": None,
                 "ModDate": None}
 
 
+#: Line styles that go with the colour cycle of views, one per colour: two curves
+#: differ in style as well as in colour, in grey print and for colour-blind readers.
+LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (1, 1)),
+              (0, (5, 2, 1, 2)), (0, (3, 1, 1, 1, 1, 1)), (0, (8, 2)))
+
+
 @contextmanager
-def style():
-    """Use chainrun's style (and only it) inside the block."""
+def style(colour: bool = False):
+    """Use chainrun's style (and only it) inside the block.
+
+    The paper's figures are black and white, as the paper's are. ``colour`` gives the
+    views of runs matplotlib's colour-blind-safe cycle ``petroff10`` (M. A. Petroff,
+    "Accessible Color Sequences for Data Visualization", 2024), each colour with a line
+    style of its own.
+    """
     import matplotlib
     import matplotlib.style
+    from cycler import cycler
 
     with matplotlib.rc_context():
         matplotlib.rcdefaults()
         matplotlib.style.use(STYLE)
+        if colour:
+            colours = matplotlib.style.library["petroff10"]["axes.prop_cycle"].by_key()["color"]
+            matplotlib.rcParams["axes.prop_cycle"] = (cycler(color=colours)
+                                                      + cycler(linestyle=LINESTYLES))
         yield
 
 
@@ -132,7 +149,7 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
     out = path.parent / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    with style():
+    with style(colour=True):
         for view in views:
             outputs = [out / f"{path.stem}-{view}{suffix}" for suffix in (".png", ".pdf")]
             _save(draw_view(run, view, log=log), outputs)
@@ -141,10 +158,13 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
 
 
 def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False) -> list[Path]:
-    """Draw the sweep in ``folder`` (its index.h5): the final velocities of ``balls``
-    against each swept key (``sweep-final``) and a panel per run (``sweep-runs``), as
-    PNG and PDF in ``out`` (default ``folder/figures``). Returns the files written."""
-    from chainrun.plotting.views import draw_sweep, draw_sweep_runs
+    """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
+    ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
+    final velocities of ``balls`` against each swept key (``sweep-final``); or, for an
+    ensemble (runs that differ only in their random seeds), the mean and spread of its
+    runs (``ensemble``) instead of the latter. Returns the files written."""
+    from chainrun.plotting.views import (draw_ensemble, draw_sweep, draw_sweep_runs,
+                                         is_ensemble)
     from chainrun.store import read_index, read_run
 
     folder = Path(folder)
@@ -152,9 +172,10 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False) -> list[
     out = folder / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    with style():
-        for name, figure in (("sweep-final", draw_sweep(runs, balls)),
-                             ("sweep-runs", draw_sweep_runs(runs, log=log))):
+    with style(colour=True):
+        first = (("ensemble", draw_ensemble(runs)) if is_ensemble(runs)
+                 else ("sweep-final", draw_sweep(runs, balls)))
+        for name, figure in (first, ("sweep-runs", draw_sweep_runs(runs, log=log))):
             outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]
             _save(figure, outputs)
             written += outputs

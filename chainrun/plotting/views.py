@@ -3,28 +3,37 @@
 ``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
 wave front shows), ``forces`` (contact force over contact and time), ``profiles`` and
 ``displacements`` (velocity and displacement along the line at some snapshot times),
-``final`` (final velocity of every ball), ``energy`` (kinetic, contact and total energy
-over time) and ``sensors`` (the force sensors' traces). ``draw_sweep`` draws a sweep's
-final velocities against its swept keys, ``draw_sweep_runs`` a panel per run. Each artist carries a ``gid`` naming the array it shows, so tests can match what
-is drawn with the file.
+``final`` (final velocity of every ball), ``energy`` (kinetic, contact and dissipated
+energy over time, and their sum) and ``sensors`` (the force sensors' traces).
+``draw_sweep`` draws a sweep's final velocities against its swept keys,
+``draw_sweep_runs`` a panel per run, and ``draw_ensemble`` the mean and spread of an
+ensemble's runs (the same line over random seeds).
+
+Every axis is in the run's own units (``chainrun.units``: SI with a readable prefix, or
+the paper's units); lines take a colour-blind-safe colour cycle with distinct line
+styles (``chainrun.plotting.style(colour=True)``); ball and contact axes have integer
+ticks; titles say what the line is. Each artist carries a ``gid`` naming the array it
+shows, so tests can match what is drawn with the file.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
+from chainrun.units import axis_label, format_value, scale_for
 
-__all__ = ["VIEWS", "draw_sweep", "draw_sweep_runs", "draw_view"]
+__all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
+           "draw_view", "is_ensemble"]
 
 VIEWS = ("spacetime", "forces", "profiles", "displacements", "final", "energy", "sensors")
 #: an image wider than this many balls shows every s-th ball (the file is read so)
 MAX_IMAGE_BALLS = 2000
 #: profiles drawn at most
 MAX_PROFILES = 6
-UNITS = "paper units"
 
 
 def _snapshots_needed(run, view: str, least: int) -> None:
@@ -33,19 +42,112 @@ def _snapshots_needed(run, view: str, least: int) -> None:
                             f"has {run.times.size} (set output.times in the experiment)")
 
 
+def _integer_axis(axis) -> None:
+    """Ball and contact numbers: integer ticks only."""
+    axis.set_major_locator(MaxNLocator(integer=True))
+
+
+def _law(alpha: np.ndarray) -> str:
+    if alpha.size == 0:
+        return ""
+    if np.all(alpha == alpha[0]):
+        a = float(alpha[0])
+        return {1.0: "linear contacts", 1.5: "Hertz contacts"}.get(a, f"contacts ^{a:g}")
+    return "mixed contact laws"
+
+
+#: The quantity of a swept key's values, by its last part (for its axis's unit).
+_SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "diameter",
+                   "gap": "gap", "force": "force", "t_end": "time", "mass": "mass",
+                   "restitution_speed": "velocity"}
+
+
+def describe(run, varying=(), width: int | None = None) -> str:
+    """What the line of a run is, in a line: its balls (material, diameter), strikers
+    and speed, contact law, walls, precompression and damping; what the swept keys
+    ``varying`` set is left out (it differs from run to run). With ``width``, wrapped
+    into lines of about that many characters between its parts."""
+    line, units = run.line, run.units
+    varying = {key.rpartition(".")[2] for key in varying}
+    config = run.parameters.get("config_resolved", {}).get("chain", {})
+    parts = []
+    if line.diameter is not None:
+        names = sorted(set(np.asarray(line.material).tolist()) - {""})
+        d = np.asarray(line.diameter)
+        size = (format_value(float(d[0]), "diameter", units) if np.all(d == d[0])
+                else f"{format_value(float(d.min()), 'diameter', units)}"
+                     f"-{format_value(float(d.max()), 'diameter', units)}")
+        what = " and ".join(n.replace("_", " ") for n in names) or "given"
+        parts.append(f"N = {line.n} {what} spheres"
+                     + ("" if "diameter" in varying else f" of {size}"))
+    else:
+        parts.append(f"N = {line.n}")
+        if not np.all(line.mass == line.mass[0]):
+            parts.append(f"masses {line.mass.min():.3g}-{line.mass.max():.3g}")
+    moving = line.velocity != 0.0
+    k = line.n if moving.all() else int(np.argmin(moving))
+    if moving.any():
+        speed = format_value(float(np.max(np.abs(line.velocity))), "velocity", units)
+        parts.append(f"K = {k} at {speed}" if units == "si" and "speed" not in varying
+                     else f"K = {k}")
+    if line.n > 1:
+        parts.append(_law(np.asarray(line.alpha)))
+    walls = [side for side, w in (("left", line.left), ("right", line.right)) if w]
+    if walls:
+        parts.append(f"wall{'s' if len(walls) > 1 else ''} {' and '.join(walls)}")
+    if "precompression" in config and "precompression" not in varying:
+        parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
+    if "restitution" in config and "restitution" not in varying:
+        e = config["restitution"]
+        law = config.get("damping_law", "")
+        law = {"tsuji": "Tsuji", "kuwabara-kono": "Kuwabara-Kono"}.get(law, law)
+        parts.append(f"restitution {e if isinstance(e, (int, float)) else 'varied'} ({law})")
+    elif line.is_damped:
+        parts.append("damped")
+    parts = [p for p in parts if p]
+    if width is None:
+        return ", ".join(parts)
+    lines = [parts[0]]
+    for part in parts[1:]:
+        if len(lines[-1]) + 2 + len(part) > width:
+            lines[-1] += ","
+            lines.append(part)
+        else:
+            lines[-1] += ", " + part
+    return "\n".join(lines)
+
+
+def _title(run, width: int = 72) -> str:
+    """The experiment (and run) name over what the line is, wrapped to ``width``."""
+    experiment = run.parameters.get("experiment", "")
+    run_id = run.parameters.get("run_id", "")
+    name = experiment + (f" ({run_id})" if run_id and run_id != "run" else "")
+    return "\n".join([name] * bool(name) + [describe(run, width=width)])
+
+
+def _time_axis(axes, run, times, which: str = "x"):
+    """Label a time axis in the run's units; returns the scaling for the times."""
+    label, scaled = axis_label("time", "time", run.units, times)
+    (axes.set_xlabel if which == "x" else axes.set_ylabel)(label)
+    return scaled
+
+
 def _spacetime(run, figure: Figure, axes) -> None:
     _snapshots_needed(run, "spacetime", 2)
     stride = -(-run.n // MAX_IMAGE_BALLS)
     v = np.asarray(run.velocities[:, ::stride])
     balls = np.arange(1, run.n + 1)[::stride]
-    top = float(np.max(np.abs(v))) or 1.0
-    image = axes.imshow(v.T, origin="lower", aspect="auto", cmap="RdBu_r",
+    label, speed = axis_label("velocity", "velocity", run.units, v)
+    time = _time_axis(axes, run, run.times)
+    top = float(np.max(np.abs(speed(v)))) or 1.0
+    t = time(run.times)
+    image = axes.imshow(speed(v).T, origin="lower", aspect="auto", cmap="RdBu_r",
                         vmin=-top, vmax=top, interpolation="nearest",
-                        extent=(run.times[0], run.times[-1], balls[0] - 0.5,
-                                balls[-1] + stride - 0.5), gid="velocity")
-    figure.colorbar(image, ax=axes, label=f"velocity ({UNITS})")
-    axes.set_xlabel(f"time ({UNITS})")
+                        extent=(t[0], t[-1], balls[0] - 0.5, balls[-1] + stride - 0.5),
+                        gid="velocity")
+    figure.colorbar(image, ax=axes, label=label)
     axes.set_ylabel("ball" + (f" (every {stride}th)" if stride > 1 else ""))
+    _integer_axis(axes.yaxis)
 
 
 def _forces(run, figure: Figure, axes) -> None:
@@ -55,23 +157,29 @@ def _forces(run, figure: Figure, axes) -> None:
     stride = -(-(run.n - 1) // MAX_IMAGE_BALLS)
     force = run.contact_forces(stride)
     contacts = np.arange(1, run.n)[::stride]
-    image = axes.imshow(force.T, origin="lower", aspect="auto", cmap="magma_r",
+    label, scaled = axis_label("contact force", "force", run.units, force)
+    t = _time_axis(axes, run, run.times)(run.times)
+    image = axes.imshow(scaled(force).T, origin="lower", aspect="auto", cmap="magma_r",
                         vmin=0.0, interpolation="nearest",
-                        extent=(run.times[0], run.times[-1], contacts[0] - 0.5,
-                                contacts[-1] + stride - 0.5), gid="force")
-    figure.colorbar(image, ax=axes, label=f"contact force ({UNITS})")
-    axes.set_xlabel(f"time ({UNITS})")
+                        extent=(t[0], t[-1], contacts[0] - 0.5, contacts[-1] + stride - 0.5),
+                        gid="force")
+    figure.colorbar(image, ax=axes, label=label)
     axes.set_ylabel("contact j (balls j, j+1)" + (f", every {stride}th" if stride > 1 else ""))
+    _integer_axis(axes.yaxis)
 
 
-def _along_the_line(run, figure: Figure, axes, name: str, data, label: str) -> None:
+def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str) -> None:
     _snapshots_needed(run, name, 1)
     picks = np.unique(np.linspace(0, run.times.size - 1, MAX_PROFILES).round().astype(int))
+    rows = np.asarray(data[picks])
+    label, scaled = axis_label(name, quantity, run.units, rows)
     balls = np.arange(1, run.n + 1)
-    for i in picks:
-        axes.plot(balls, data[i], label=f"t = {run.times[i]:.4g}", gid=f"{name}/{i}")
+    for row, i in zip(rows, picks):
+        axes.plot(balls, scaled(row), label=f"t = {format_value(run.times[i], 'time', run.units)}",
+                  gid=f"{name}/{i}")
     axes.set_xlabel("ball")
-    axes.set_ylabel(f"{label} ({UNITS})")
+    _integer_axis(axes.xaxis)
+    axes.set_ylabel(label)
     axes.legend(fontsize="small")
 
 
@@ -80,44 +188,57 @@ def _profiles(run, figure: Figure, axes) -> None:
 
 
 def _displacements(run, figure: Figure, axes) -> None:
-    _along_the_line(run, figure, axes, "displacement", run.positions, "displacement")
+    _along_the_line(run, figure, axes, "displacement", run.positions, "position")
 
 
 def _sensors(run, figure: Figure, axes) -> None:
     if run.sensor_balls.size == 0:
         raise ChainrunError(f"{run.path}: no force sensors (set output.sensors and "
                             "output.sensor_dt in the experiment)")
+    mean = run.sensor_force.mean(axis=2)
+    label, scaled = axis_label("mean contact force on the ball", "force", run.units, mean)
+    t = _time_axis(axes, run, run.sensor_time)(run.sensor_time)
     for s, ball in enumerate(run.sensor_balls):
-        axes.plot(run.sensor_time, run.sensor_force[:, s, :].mean(axis=1),
-                  label=f"ball {ball}", gid=f"sensor/{ball}")
-    axes.set_xlabel(f"time ({UNITS})")
-    axes.set_ylabel(f"mean contact force on the ball ({UNITS})")
+        axes.plot(t, scaled(mean[:, s]), label=f"ball {ball}", gid=f"sensor/{ball}")
+    axes.set_ylabel(label)
     axes.legend(fontsize="small")
 
 
 def _final(run, figure: Figure, axes, log: bool) -> None:
-    v = run.final_velocity
-    axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=3, color="black",
+    v = np.asarray(run.final_velocity)
+    label, scaled = axis_label("final velocity", "velocity", run.units, v)
+    axes.plot(np.arange(1, run.n + 1), scaled(v), marker="o", markersize=3,
               gid="final_velocity")
     axes.axhline(0.0, color="0.6", linewidth=0.6)
     axes.set_xlabel("ball")
-    axes.set_ylabel(f"final velocity ({UNITS})")
+    _integer_axis(axes.xaxis)
+    axes.set_ylabel(label)
     if log:
-        small = np.abs(v[v != 0.0])
+        small = np.abs(scaled(v)[v != 0.0])
         axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
                                                 1e-12))
 
 
 def _energy(run, figure: Figure, axes) -> None:
+    """Kinetic, contact and dissipated energy and their sum, which the energy balance
+    keeps at the initial energy."""
     _snapshots_needed(run, "energy", 2)
-    t = run.times
-    kinetic = run.observables["kinetic_energy"]
-    stored = run.observables["potential_energy"]
-    axes.plot(t, kinetic, label="kinetic", gid="kinetic_energy")
-    axes.plot(t, stored, label="in contacts", gid="potential_energy")
-    axes.plot(t, kinetic + stored, label="total", color="black", gid="total_energy")
-    axes.set_xlabel(f"time ({UNITS})")
-    axes.set_ylabel(f"energy ({UNITS})")
+    obs = run.observables
+    kinetic, stored = obs["kinetic_energy"], obs["potential_energy"]
+    dissipated = obs["dissipated_energy"]
+    total = kinetic + stored + dissipated
+    label, scaled = axis_label("energy", "energy", run.units,
+                               np.concatenate([kinetic, stored, total]))
+    t = _time_axis(axes, run, run.times)(run.times)
+    contacts = ("in contacts and walls" if not np.any(run.line.force)
+                else "in contacts and walls, less the forces' work")
+    axes.plot(t, scaled(kinetic), label="kinetic", gid="kinetic_energy")
+    axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
+    if np.any(dissipated):
+        axes.plot(t, scaled(dissipated), label="dissipated", gid="dissipated_energy")
+    axes.plot(t, scaled(total), label="sum", color="black", linestyle="-", linewidth=1.4,
+              gid="total_energy")
+    axes.set_ylabel(label)
     axes.legend(fontsize="small")
 
 
@@ -125,12 +246,12 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
     """The Figure of ``view`` (one of ``VIEWS``) for a run (``chainrun.store.RunData``).
 
     ``log`` draws the final velocities on a symmetric log scale (linear below the
-    smallest non-zero magnitude). Must be called inside ``chainrun.plotting.style()``
-    for the figure to look as saved.
+    smallest non-zero magnitude). Must be called inside
+    ``chainrun.plotting.style(colour=True)`` for the figure to look as saved.
     """
     if view not in VIEWS:
         raise ChainrunError(f"no view {view!r} (the views: {', '.join(VIEWS)})")
-    figure = Figure()
+    figure = Figure(layout="constrained")
     axes = figure.add_subplot()
     if view == "final":
         _final(run, figure, axes, log)
@@ -138,10 +259,7 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
         {"spacetime": _spacetime, "forces": _forces, "profiles": _profiles,
          "displacements": _displacements, "energy": _energy, "sensors": _sensors}[view](
             run, figure, axes)
-    experiment = run.parameters.get("experiment", "")
-    run_id = run.parameters.get("run_id", "")
-    axes.set_title(f"{experiment} {run_id}: N = {run.n}, K = {run.k}, "
-                   f"alpha = {run.alpha:g}", fontsize="medium")
+    axes.set_title(_title(run), fontsize="small")
     return figure
 
 
@@ -151,6 +269,18 @@ def _ball_index(ball: int, n: int) -> int | None:
     return i if 0 <= i < n else None
 
 
+def _overrides(run) -> dict:
+    return run.parameters.get("overrides", {})
+
+
+def is_ensemble(runs) -> bool:
+    """Whether the runs are one line over random draws: more than one, and every swept
+    key a generator's seed or the replica number."""
+    keys = {key for run in runs for key in _overrides(run)}
+    return len(runs) > 1 and bool(keys) and all(
+        key == "replica" or key.endswith(".seed") for key in keys)
+
+
 def draw_sweep(runs, balls=(1, -1)) -> Figure:
     """Final velocities of ``balls`` against each swept key, a panel per key.
 
@@ -158,16 +288,19 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
     numbers, 1-based, negative counting from the end (-1: the last ball). Each point
     carries the run's id; a ball a run does not have is left out of it.
     """
-    keys = sorted({key for run in runs for key in run.parameters.get("overrides", {})})
+    keys = sorted({key for run in runs for key in _overrides(run)})
     if not keys:
         raise ChainrunError("not a sweep: its runs have no swept keys")
-    figure = Figure(figsize=(4.5 * len(keys), 3.4), layout="constrained")
+    units = runs[0].units
+    finals = np.concatenate([np.asarray(run.final_velocity) for run in runs])
+    label, scaled = axis_label("final velocity", "velocity", units, finals)
+    figure = Figure(figsize=(4.5 * len(keys), 3.6), layout="constrained")
     for panel, key in enumerate(keys, start=1):
         axes = figure.add_subplot(1, len(keys), panel)
         for which, ball in enumerate(balls):
             points = []
             for run in runs:
-                value = run.parameters.get("overrides", {}).get(key)
+                value = _overrides(run).get(key)
                 i = _ball_index(ball, run.n)
                 if isinstance(value, (int, float)) and i is not None:
                     points.append((value, run.final_velocity[i]))
@@ -176,15 +309,19 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
             x, y = np.array(sorted(points)).T
             name = "last ball" if ball == -1 else (f"ball {ball}" if ball > 0
                                                     else f"ball N{ball + 1:+d}")
-            axes.plot(x, y, label=name, color="black", gid=f"final_velocity/{key}/{ball}",
-                      linestyle=("-", "--", "-.", ":")[which % 4],
+            quantity = _SWEPT_QUANTITY.get(key.rpartition(".")[2])
+            xlabel, along = (axis_label(key, quantity, units, x) if quantity
+                             else (key, scale_for("alpha", "paper")))
+            axes.plot(along(x), scaled(y), label=name, gid=f"final_velocity/{key}/{ball}",
                       **MARKERS[which % len(MARKERS)])
+            axes.set_xlabel(xlabel)
         axes.axhline(0.0, color="0.6", linewidth=0.6)
-        axes.set_xlabel(key)
-        axes.set_ylabel(f"final velocity ({UNITS})")
+        axes.set_ylabel(label)
         axes.legend(fontsize="small")
     experiment = runs[0].parameters.get("experiment", "")
-    figure.suptitle(f"{experiment}: {len(runs)} runs", fontsize="medium")
+    figure.suptitle("\n".join([f"{experiment}: {len(runs)} runs"]
+                              + [describe(runs[0], keys, 40 * len(keys))]),
+                    fontsize="small")
     return figure
 
 
@@ -193,19 +330,76 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
     its run id, on a grid of at most 5 columns."""
     cols = min(5, len(runs))
     rows = -(-len(runs) // cols)
-    figure = Figure(figsize=(2.6 * cols, 2.2 * rows), layout="constrained")
+    units = runs[0].units
+    label, scaled = axis_label("final velocity", "velocity", units,
+                               np.concatenate([np.asarray(r.final_velocity) for r in runs]))
+    figure = Figure(figsize=(2.6 * cols, 2.2 * rows + 0.4), layout="constrained")
     for i, run in enumerate(runs):
         axes = figure.add_subplot(rows, cols, i + 1)
-        v = run.final_velocity
-        axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, color="black",
-                  linewidth=0.8, gid=f"final_velocity/{run.parameters.get('run_id', i)}")
+        v = scaled(run.final_velocity)
+        axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, linewidth=0.8,
+                  gid=f"final_velocity/{run.parameters.get('run_id', i)}")
         axes.axhline(0.0, color="0.6", linewidth=0.5)
         axes.set_title(str(run.parameters.get("run_id", i)), fontsize="small")
         axes.tick_params(labelsize="x-small")
+        _integer_axis(axes.xaxis)
         if log:
             small = np.abs(v[v != 0.0])
             axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size
                                                     else 1.0, 1e-12))
     figure.supxlabel("ball", fontsize="small")
-    figure.supylabel(f"final velocity ({UNITS})", fontsize="small")
+    figure.supylabel(label, fontsize="small")
+    return figure
+
+
+def draw_ensemble(runs) -> Figure:
+    """The ensemble of ``runs`` (one line over random draws): the mean final velocity of
+    each ball with its standard deviation and range over the runs, and the energy left
+    in the line (kinetic and contact) over time, each run's and their mean.
+
+    Raises
+    ------
+    ChainrunError
+        If the runs' lines differ in length.
+    """
+    if len({run.n for run in runs}) != 1:
+        raise ChainrunError("an ensemble's runs must have lines of one length")
+    keys = {key for run in runs for key in _overrides(run)}
+    units = runs[0].units
+    finals = np.array([np.asarray(run.final_velocity) for run in runs])
+    mean, sd = finals.mean(axis=0), finals.std(axis=0, ddof=1)
+    same_times = all(run.times.size >= 2 and np.array_equal(run.times, runs[0].times)
+                     for run in runs)
+    figure = Figure(figsize=(9.6 if same_times else 4.8, 3.8), layout="constrained")
+    axes = figure.add_subplot(1, 2 if same_times else 1, 1)
+    label, scaled = axis_label("final velocity", "velocity", units, finals)
+    balls = np.arange(1, finals.shape[1] + 1)
+    axes.fill_between(balls, scaled(finals.min(axis=0)), scaled(finals.max(axis=0)),
+                      alpha=0.18, linewidth=0, label="range", gid="final_velocity/range")
+    axes.fill_between(balls, scaled(mean - sd), scaled(mean + sd), alpha=0.35, linewidth=0,
+                      label="mean ± standard deviation", gid="final_velocity/sd")
+    axes.plot(balls, scaled(mean), label=f"mean of {len(runs)} runs",
+              gid="final_velocity/mean")
+    axes.axhline(0.0, color="0.6", linewidth=0.6)
+    axes.set_xlabel("ball")
+    _integer_axis(axes.xaxis)
+    axes.set_ylabel(label)
+    axes.legend(fontsize="small")
+    if same_times:
+        axes = figure.add_subplot(1, 2, 2)
+        left = np.array([run.observables["kinetic_energy"] + run.observables["potential_energy"]
+                         for run in runs])
+        label, scaled = axis_label("energy left in the line", "energy", units, left)
+        t = _time_axis(axes, runs[0], runs[0].times)(runs[0].times)
+        for i, row in enumerate(left):
+            axes.plot(t, scaled(row), color="0.7", linestyle="-", linewidth=0.6,
+                      label="each run" if i == 0 else None, gid=f"energy/{i}")
+        axes.plot(t, scaled(left.mean(axis=0)), color="black", linestyle="-", linewidth=1.4,
+                  label="mean", gid="energy/mean")
+        axes.set_ylabel(label)
+        axes.legend(fontsize="small")
+    experiment = runs[0].parameters.get("experiment", "")
+    figure.suptitle("\n".join([f"{experiment}: an ensemble of {len(runs)} runs"]
+                              + [describe(runs[0], keys, 80 if same_times else 40)]),
+                    fontsize="small")
     return figure

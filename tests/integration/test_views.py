@@ -74,7 +74,7 @@ def test_final_velocities_and_profiles_are_the_files(wave):
 
 def test_the_energy_view_shows_energy_conserved(wave):
     path, raw = wave
-    with style():
+    with style(colour=True):
         figure = draw_view(read_run(path), "energy")
     np.testing.assert_array_equal(artist(figure, "kinetic_energy").get_ydata(), raw["kinetic"])
     np.testing.assert_array_equal(artist(figure, "potential_energy").get_ydata(), raw["stored"])
@@ -194,3 +194,102 @@ def test_strided_forces_read_only_their_balls_and_agree(wave):
     path, _ = wave
     run = read_run(path)
     np.testing.assert_array_equal(run.contact_forces(4), run.contact_forces()[:, ::4])
+
+
+DAMPED_SI = """name = "beads"
+units = "si"
+[chain]
+n = 12
+k = 1
+speed = 0.3
+diameter = 0.008
+material = "stainless_steel"
+restitution = 0.8
+damping_law = "tsuji"
+[walls.right]
+material = "steel"
+[output]
+times = {start = 0.0, stop = 2.0e-4, step = 4.0e-6}
+sensors = [4, 8]
+sensor_dt = 1.0e-7
+[solver]
+t_end = 2.0e-4
+"""
+
+#: the factor of each unit a label may show, from its SI base (worked by hand)
+FACTORS = {"s": 1.0, "ms": 1e3, "µs": 1e6, "ns": 1e9, "m/s": 1.0, "mm/s": 1e3,
+           "µm/s": 1e6, "m": 1.0, "mm": 1e3, "µm": 1e6, "nm": 1e9, "N": 1.0, "mN": 1e3,
+           "kN": 1e-3, "J": 1.0, "mJ": 1e3, "µJ": 1e6, "nJ": 1e9}
+
+
+@pytest.fixture(scope="module")
+def beads(tmp_path_factory):
+    return read_run(simulate_text(tmp_path_factory.mktemp("si"), DAMPED_SI) / "run.h5")
+
+
+def unit_of(label: str) -> float:
+    """The factor from SI of the unit in a label ``"name (unit)"``."""
+    unit = label.rsplit("(", 1)[1].rstrip(")")
+    return FACTORS[unit]
+
+
+def texts(figure) -> list[str]:
+    out = [figure.get_suptitle()] if figure.get_suptitle() else []
+    for axes in figure.axes:
+        out += [axes.get_xlabel(), axes.get_ylabel(), axes.get_title()]
+        legend = axes.get_legend()
+        if legend is not None:
+            out += [t.get_text() for t in legend.get_texts()]
+    return out
+
+
+def test_an_si_run_is_drawn_in_si_with_readable_prefixes(beads):
+    with style(colour=True):
+        figures = {view: draw_view(beads, view) for view in VIEWS}
+    for view, figure in figures.items():
+        assert not any("paper units" in text for text in texts(figure)), view
+    # each axis's data are the file's times the factor its label's unit says
+    spacetime = figures["spacetime"]
+    image = artist(spacetime, "velocity")
+    left, right, _, _ = image.get_extent()
+    factor = unit_of(spacetime.axes[0].get_xlabel())
+    assert factor == 1e6  # t_end = 200 µs
+    assert (left, right) == pytest.approx((0.0, beads.times[-1] * factor))
+    speed = unit_of(spacetime.axes[1].get_ylabel())
+    np.testing.assert_allclose(image.get_array(), np.asarray(beads.velocities).T * speed)
+    sensors = figures["sensors"]
+    for s, ball in enumerate(beads.sensor_balls):
+        line = artist(sensors, f"sensor/{ball}")
+        np.testing.assert_allclose(line.get_xdata(),
+                                   beads.sensor_time * unit_of(sensors.axes[0].get_xlabel()))
+        np.testing.assert_allclose(line.get_ydata(), beads.sensor_force[:, s].mean(axis=1)
+                                   * unit_of(sensors.axes[0].get_ylabel()))
+    assert "stainless steel spheres of 8 mm" in figures["final"].axes[0].get_title()
+    assert "300 mm/s" in figures["final"].axes[0].get_title()
+
+
+def test_curves_differ_in_colour_and_style_and_ball_axes_are_whole_numbers(beads):
+    with style(colour=True):
+        profiles = draw_view(beads, "profiles")
+        sensors = draw_view(beads, "sensors")
+    for figure in (profiles, sensors):
+        lines = [a for a in figure.axes[0].get_lines() if a.get_gid()]
+        assert len(lines) >= 2
+        assert len({a.get_color() for a in lines}) == len(lines)
+        # a dash pattern each (get_linestyle says "--" for every dashed one)
+        assert len({str(a._unscaled_dash_pattern) for a in lines}) == len(lines)
+    ticks = profiles.axes[0].get_xticks()
+    assert np.all(ticks == np.round(ticks))
+
+
+def test_the_energy_sum_of_a_damped_run_is_flat(beads):
+    with style(colour=True):
+        figure = draw_view(beads, "energy")
+    factor = unit_of(figure.axes[0].get_ylabel())
+    obs = beads.observables
+    np.testing.assert_allclose(artist(figure, "dissipated_energy").get_ydata(),
+                               obs["dissipated_energy"] * factor)
+    total = artist(figure, "total_energy").get_ydata() / factor
+    initial = 0.5 * float(beads.line.mass @ beads.line.velocity ** 2)
+    assert obs["dissipated_energy"][-1] > 0.2 * initial  # the damping took a real share
+    np.testing.assert_allclose(total, initial, rtol=1e-9)
