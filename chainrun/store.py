@@ -752,6 +752,8 @@ class RunWriter:
             _array(sensors, "mean_force", force.mean(axis=2), [sample, sensor],
                    "mean of the two contact forces: what a sensor inside the ball measures")
             sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
+            sensors.attrs["end"] = np.float64(np.nan if self._spec.sensor_end is None
+                                              else self._spec.sensor_end)
 
     def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution,
                            wall: h5py.Dataset) -> None:
@@ -1307,6 +1309,7 @@ def run_config_hash(path) -> str | None:
 ANALYSIS_FORMAT = "chainrun-analysis"
 ANALYSIS_FORMAT_VERSION = 1
 _FORMAT_VERSIONS[ANALYSIS_FORMAT] = ANALYSIS_FORMAT_VERSION
+_READABLE[ANALYSIS_FORMAT] = (ANALYSIS_FORMAT_VERSION,)
 
 #: Columns of an analysis file's ``/inputs`` table, in order.
 ANALYSIS_INPUT_COLUMNS = ("kind", "name", "file", "sha256")
