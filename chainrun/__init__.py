@@ -8,11 +8,12 @@ and ``cli`` (the ``chainrun`` command); ``api`` is the same from Python::
     import chainrun
     ds = chainrun.simulate("cradle.toml")      # an xarray Dataset
     ds = chainrun.open_run("results/cradle/run.h5")
+    ds = chainrun.open_sweep("results/disorder")  # every run, along a dimension "run"
 """
 
 __version__ = "0.1.0"
 
-__all__ = ["open_run", "simulate"]
+__all__ = ["open_run", "open_sweep", "simulate"]
 
 
 def __getattr__(name):

@@ -1,9 +1,11 @@
-"""chainrun from Python: run an experiment, or open a run file, as an xarray Dataset.
+"""chainrun from Python: run an experiment, or open a run file or a sweep, as xarray.
 
 ``simulate`` takes what an experiment file holds (a path, a dict of its tables, or the
 tables as keyword arguments), runs it through the same pipeline as ``chainrun
 simulate`` (validation, solver, run file) and returns what ``open_run`` reads back from
 that file, so a Dataset made here and one read from the command's file are the same.
+``open_sweep`` reads every run of an output folder (a sweep, or an ensemble over random
+seeds) as one Dataset along a dimension ``run``.
 
 Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``contact`` (1..N-1), ``wall`` and
 ``event`` (the contact event log). Quantities are in the run's units: SI for an
@@ -28,7 +30,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["open_run", "simulate"]
+__all__ = ["open_run", "open_sweep", "simulate"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
 
@@ -205,6 +207,67 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         **{f"scales_{k}": v for k, v in scales.items()},
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+#: What differs from run to run of a sweep, kept as variables along ``run``: the
+#: outcome of each, and every diagnostic.
+_PER_RUN = ("outcome", "terminal", "end_time", "message", "dissipated_energy",
+            "config_hash", "n", "k", "alpha")
+#: Values that fill a run's shorter event log (its events are numbered 0..E-1).
+_EVENT_FILL = {"event_contact": -1, "event_kind": 0}
+
+
+def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
+    """Every run of the output folder ``folder`` (its ``index.h5``) as one Dataset.
+
+    The runs' Datasets (``open_run``) are put side by side along a new dimension
+    ``run``, whose coordinate is the run ids; the swept keys are coordinates along it
+    (``chain.mass.seed``, ``replica``, ``chain.k``: NaN for a run without the key). A
+    variable of every run has the dimension ``run`` first: ``final_velocity`` has shape
+    (runs, balls), so an ensemble's mean final velocity is
+    ``ds.final_velocity.mean("run")``. Runs whose lines or snapshot times differ are
+    aligned on the union of balls and times (NaN where a run has none). The event
+    logs, of different lengths, are kept whole: run r's events are
+    ``ds.event_time.isel(run=r)[: ds.event_count.isel(run=r)]``, the rest filled with
+    NaN (times), -1 (contacts) and 0 (kinds). Each run's outcome, ``end_time``,
+    ``terminal``, ``message``, ``config_hash``, ``n``, ``k``, ``alpha`` and
+    diagnostics (``diagnostics_*``) are variables along ``run``; the attributes are
+    those every run shares.
+
+    Raises
+    ------
+    chainrun.errors.StoreError
+        For a folder without an index file, or a run file that cannot be read.
+    """
+    import numpy as np
+    import xarray as xr
+
+    from chainrun.errors import StoreError
+    from chainrun.store import read_index
+
+    folder = Path(folder)
+    index = folder / "index.h5"
+    if not index.is_file():
+        raise StoreError(f"{folder}: no index.h5 (not a chainrun output folder)")
+    rows = read_index(index)
+    if not rows:
+        raise StoreError(f"{folder}: the index lists no runs")
+    runs = [open_run(folder / str(row["file"])) for row in rows]
+    keys = list(dict.fromkeys(key for ds in runs for key in json.loads(ds.attrs["overrides"])))
+    swept = {key: ("run", [json.loads(ds.attrs["overrides"]).get(key, np.nan) for ds in runs])
+             for key in keys}
+    per_run = [key for key in runs[0].attrs
+               if key in _PER_RUN or key.startswith("diagnostics_")]
+    counts = [ds.sizes["event"] for ds in runs]
+    runs = [ds.assign({key: ds.attrs[key] for key in per_run}) for ds in runs]
+    out = xr.concat(runs, dim="run", join="outer", fill_value={**_EVENT_FILL},
+                    combine_attrs="drop_conflicts", coords="minimal", compat="override")
+    for key in per_run:
+        out.attrs.pop(key, None)
+    out.attrs.pop("overrides", None)
+    out = out.assign_coords(run=[str(row["run_id"]) for row in rows], **swept)
+    return out.assign(event_count=("run", np.array(counts),
+                                   {"long_name": "events in each run's log"}))
 
 
 def _experiment(config, tables: dict[str, Any]):

@@ -100,6 +100,9 @@ class RunSpec:
     sensors : tuple of int
         Balls (numbered from 1) whose contact forces are sampled every ``sensor_dt``.
     sensor_dt : float or None
+    sensor_end : float or None
+        The last time a sample is taken (``output.sensor_end``, by default ``t_end``
+        or else the last snapshot time); None without sensors.
     overrides : dict
         The swept keys and their values for this run, e.g. ``{"chain.k": 2}``.
     config : dict
@@ -137,6 +140,7 @@ class RunSpec:
     source_text: str = ""
     sensors: tuple[int, ...] = ()
     sensor_dt: float | None = None
+    sensor_end: float | None = None
     units: str = "paper"
     chain: Any = None
     walls: Any = None
@@ -164,6 +168,11 @@ class RunSpec:
                         one_line(f"run {self.run_id}: {p.line()}") for p in exc.problems]) from None
             object.__setattr__(self, "_line", line)  # a cache, not a field
         return line
+
+    @property
+    def sensor_samples(self) -> int:
+        """Force samples the run's sensors take: sample times by sensor balls."""
+        return _samples(self.sensors, self.sensor_dt, self.sensor_end)
 
     @property
     def damped(self) -> bool:
@@ -255,6 +264,9 @@ MAX_RANGE_TIMES = 10_000_000
 MAX_RUNS = 10_000
 #: Most snapshots (runs times snapshot times) an experiment may ask for in all.
 MAX_SNAPSHOTS = 10_000_000
+#: Most force samples a run may take (sample times by sensors): each is a row of the
+#: run file and of the solver's memory.
+MAX_SENSOR_SAMPLES = 10_000_000
 #: Largest integer a config may hold: run files store integers as int64.
 MAX_INT = 2**63 - 1
 
@@ -958,6 +970,7 @@ class Output(BaseModel):
     times: tuple[float, ...] = ()
     sensors: tuple[int, ...] = ()
     sensor_dt: _OptFloat = Field(None, gt=0)
+    sensor_end: _OptFloat = Field(None, gt=0)
 
     @field_validator("sensors", mode="before")
     @classmethod
@@ -988,8 +1001,11 @@ class Output(BaseModel):
         if self.sensors and self.sensor_dt is None:
             raise _fail([_Issue("required with output.sensors (the sampling interval)",
                                 ("sensor_dt",))])
-        if self.sensor_dt is not None and not self.sensors:
-            raise _fail([_Issue("given without output.sensors", ("sensor_dt",))])
+        issues = [_Issue("given without output.sensors", (key,))
+                  for key in ("sensor_dt", "sensor_end")
+                  if getattr(self, key) is not None and not self.sensors]
+        if issues:
+            raise _fail(issues)
         return self
 
     @field_validator("times", mode="before")
@@ -1042,18 +1058,50 @@ class SolverSettings(BaseModel):
     max_events: _OptInt = Field(None, gt=0)
 
 
+#: A generator table's numeric keys that a sweep may vary, ``"chain.<key>.<field>"``
+#: (``"chain.mass.seed" = [1, 2, 3]``), and their type.
+GENERATOR_FIELDS: dict[str, type] = {
+    "seed": int, "low": float, "high": float, "median": float, "sigma": float,
+    "taper": float, "start": float, "value": float,
+}
+#: The ``[sweep]`` key that asks for that many runs of the line, each drawing its
+#: random values with the file's seeds plus the run's replica number (0, 1, ...).
+REPLICAS = "replicas"
+#: Most replicas a sweep may ask for (each is a run).
+MAX_REPLICAS = 10_000
+
+
+def _generator_key(key: str) -> tuple[str, str] | None:
+    """``("mass", "seed")`` for ``"chain.mass.seed"``: a generator's field of a per-ball
+    or per-contact key of the chain; None for any other key."""
+    parts = key.split(".")
+    if (len(parts) == 3 and parts[0] == "chain" and parts[1] in _RULES
+            and parts[2] in GENERATOR_FIELDS):
+        return parts[1], parts[2]
+    return None
+
+
+def sweep_type(key: str) -> type | None:
+    """The type of a sweep key's values, or None for a key that cannot be swept."""
+    if key in SWEEPABLE_KEYS:
+        return SWEEPABLE_KEYS[key]
+    generator = _generator_key(key)
+    return None if generator is None else GENERATOR_FIELDS[generator[1]]
+
+
 def _flatten_sweep(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
     """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``.
 
-    At most two levels are unfolded (sweepable keys have two or three parts, as
-    ``walls.right.gap``), so a deep or cyclic table (YAML aliases) is reported as an
-    unknown key rather than recursed into.
+    At most three levels are unfolded (sweepable keys have two or three parts, as
+    ``walls.right.gap`` or ``chain.mass.seed``), so a deep or cyclic table (YAML
+    aliases) is reported as an unknown key rather than recursed into.
     """
     items: list[tuple[str, Any]] = []
     for key, value in table.items():
         dotted = f"{prefix}{_key_text(key)}"
-        if (isinstance(value, Mapping) and prefix.count(".") < 2 and dotted not in SWEEPABLE_KEYS
-                and (not prefix or dotted == "walls.left" or dotted == "walls.right")):
+        if (isinstance(value, Mapping) and prefix.count(".") < 2
+                and (not prefix or dotted in ("walls.left", "walls.right")
+                     or (prefix == "chain." and dotted.removeprefix("chain.") in _RULES))):
             items.extend(_flatten_sweep(value, dotted + "."))
         else:
             items.append((dotted, value))
@@ -1070,8 +1118,21 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
     named: set[str] = set()
     issues: list[_Issue] = []
     for key, values in _flatten_sweep(value):
-        if key not in SWEEPABLE_KEYS:
-            issues.append(_Issue(f"unknown key '{key}'{_suggest(key, list(SWEEPABLE_KEYS))}"))
+        if key == REPLICAS:
+            try:
+                count = _check_int(values)
+            except PydanticCustomError:
+                count = 0
+            if not 1 <= count <= MAX_REPLICAS:
+                issues.append(_Issue(f"expected a number of runs from 1 to {MAX_REPLICAS}, "
+                                     f"got {show_value(values)}", (key,)))
+            else:
+                named.add("replica")
+                valid["replica"] = tuple(range(count))
+            continue
+        if sweep_type(key) is None:
+            issues.append(_Issue(f"unknown key '{key}'"
+                                 f"{_suggest(key, [*SWEEPABLE_KEYS, REPLICAS])}"))
             continue
         sub = (key,)
         if key in named:  # "chain.k" and chain = {k = ...} in one table
@@ -1085,7 +1146,7 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
         if not values:
             issues.append(_Issue("must list at least one value", sub))
             continue
-        check = _SCALAR_CHECKS[SWEEPABLE_KEYS[key]]
+        check = _SCALAR_CHECKS[sweep_type(key)]
         clean: list[Any] = []
         ok = True
         for position, item in enumerate(values):
@@ -1104,13 +1165,20 @@ def _check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list
             clean.append(x)
         if ok:
             valid[key] = tuple(clean)
+    seeds = [key for key in valid if key.endswith(".seed")]
+    if "replica" in valid and seeds:
+        issues.append(_Issue(f"give replicas or a sweep of seeds ({seeds[0]}), not both",
+                             (REPLICAS,)))
+        valid.pop("replica")
     return valid, named, issues
 
 
 def _short(key: str) -> str:
     """A swept key as a run id names it: ``k`` for ``chain.k``, ``right_gap`` for
-    ``walls.right.gap``."""
-    return "_".join(key.split(".")[1:]) if key.startswith("walls.") else key.split(".")[-1]
+    ``walls.right.gap``, ``mass_seed`` for ``chain.mass.seed``."""
+    if key.startswith("walls.") or _generator_key(key):
+        return "_".join(key.split(".")[1:])
+    return key.split(".")[-1]
 
 
 def _label(overrides: Mapping[str, Any], sep: str = ", ") -> str:
@@ -1141,15 +1209,50 @@ def _run_id(overrides: Mapping[str, Any]) -> str:
     return kept + tail
 
 
+def _table(value: Any) -> Any:
+    """A generator table as a plain dict (a checked one, ``Values``, is JSON text)."""
+    if isinstance(value, Values) and value.table is not None:
+        return json.loads(value.table)
+    return value
+
+
+def _replica(chain: Any, number: int) -> Any:
+    """The chain's tables with each random generator's seed moved on by ``number``: the
+    ``number``-th replica's line (the 0th is the file's own)."""
+    if not isinstance(chain, Mapping):
+        return chain
+    out = dict(chain)
+    for key, value in chain.items():
+        table = _table(value)
+        if (isinstance(table, Mapping) and "random" in table
+                and isinstance(table.get("seed"), int) and not isinstance(table["seed"], bool)):
+            out[key] = {**table, "seed": table["seed"] + number}
+    return out
+
+
+def _random_keys(chain: Any) -> list[str]:
+    """The chain's keys whose values are drawn at random (a generator table's)."""
+    if not isinstance(chain, Mapping):
+        return []
+    return [key for key, value in chain.items()
+            if isinstance(_table(value), Mapping) and "random" in _table(value)]
+
+
 def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
-    """Set ``data["chain"]["k"]`` for ``"chain.k"`` (and ``data["walls"]["right"]["gap"]``
-    for ``"walls.right.gap"``), creating missing tables."""
+    """Set ``data["chain"]["k"]`` for ``"chain.k"`` (``data["walls"]["right"]["gap"]``
+    for ``"walls.right.gap"``, and the field of a generator table for
+    ``"chain.mass.seed"``), creating missing tables; ``"replica"`` moves the seeds of
+    the chain's random generators on by ``value``."""
+    if dotted == "replica":
+        data["chain"] = _replica(data.get("chain"), value)
+        return
     head, _, rest = dotted.partition(".")
     if data.get(head) is None:
         data[head] = {}
-    if not isinstance(data[head], Mapping):
+    current = _table(data[head])
+    if not isinstance(current, Mapping):
         return
-    inner = dict(data[head])
+    inner = dict(current)
     if "." in rest:
         _set_key(inner, rest, value)
     else:
@@ -1264,7 +1367,9 @@ class Experiment(BaseModel):
             "chain": _fields(self.chain),
             "output": {"times": list(self.output.times), **(
                 {"sensors": list(self.output.sensors), "sensor_dt": self.output.sensor_dt}
-                if self.output.sensors else {})},
+                if self.output.sensors else {}), **(
+                {"sensor_end": self.output.sensor_end}
+                if self.output.sensor_end is not None else {})},
             "solver": self.solver.model_dump(),
         }
         if self.units != "paper":
@@ -1319,6 +1424,7 @@ class Experiment(BaseModel):
                 problems += _translate(exc, ("solver",))
             else:
                 problems += _times_after_t_end(self.output.times, solver.t_end)
+                problems += _sensor_problems(self.output, solver.t_end)
                 if chain is not None and walls is not None:
                     problems += _needs_t_end(chain, walls, solver.t_end)
             if problems:
@@ -1344,6 +1450,7 @@ class Experiment(BaseModel):
                     max_events=solver.max_events,
                     sensors=self.output.sensors,
                     sensor_dt=self.output.sensor_dt,
+                    sensor_end=sensor_end(self.output, solver.t_end),
                     overrides=overrides,
                     config=config,
                     config_hash=hashlib.sha256(canonical.encode()).hexdigest(),
@@ -1412,6 +1519,49 @@ def _sensors_beyond_n(sensors: tuple[int, ...], n: int) -> list[_Problem]:
     i, b = beyond[0]
     return [_Problem("output.sensors", f"ball {b} (position {i}) is beyond chain.n ({n})",
                      frozenset({"chain.n"}))]
+
+
+def _samples(sensors: tuple[int, ...], dt: float | None, end: float | None) -> int:
+    """Force samples of ``sensors`` every ``dt`` from 0 to ``end``: times by balls."""
+    if not sensors or dt is None or end is None:
+        return 0
+    return (math.floor(end / dt) + 1) * len(sensors)
+
+
+def sensor_end(output: "Output", t_end: float | None) -> float | None:
+    """Where a run's sensors stop sampling: ``output.sensor_end``, else ``t_end``, else
+    the last snapshot time; None without sensors, or when the run's end is not known
+    before it runs (a problem, ``_sensor_problems``)."""
+    if not output.sensors:
+        return None
+    if output.sensor_end is not None:
+        return output.sensor_end
+    if t_end is not None:
+        return t_end
+    return output.times[-1] if output.times else None
+
+
+def _sensor_problems(output: "Output", t_end: float | None) -> list[_Problem]:
+    """A run's sensors with no end known before it runs, or with more samples than
+    ``MAX_SENSOR_SAMPLES``."""
+    if not output.sensors or output.sensor_dt is None:
+        return []
+    end = sensor_end(output, t_end)
+    if end is None:
+        return [_Problem("output.sensor_end", "required with output.sensors on a run to its "
+                         "terminal state without snapshot times (its end is not known "
+                         "before it runs): say when sampling stops",
+                         frozenset({"solver.t_end"}))]
+    samples = _samples(output.sensors, output.sensor_dt, end)
+    if samples > MAX_SENSOR_SAMPLES:
+        where = "output.sensor_end" if output.sensor_end is not None else (
+            "solver.t_end" if t_end is not None else "output.times")
+        return [_Problem("output.sensor_dt", f"{len(output.sensors)} sensors every "
+                         f"{output.sensor_dt:g} up to {end:g} ({where}) take "
+                         f"{samples:.3g} samples, too many (at most {MAX_SENSOR_SAMPLES:.0e}); "
+                         "sample less often, or stop sooner with output.sensor_end",
+                         frozenset({"solver.t_end", "output.sensor_end"}))]
+    return []
 
 
 def _times_after_t_end(times: tuple[float, ...], t_end: float | None) -> list[_Problem]:
@@ -1498,8 +1648,28 @@ def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
             if not problems and t_end is None and not line.has_terminal_state:
                 problems.append(_Problem("solver.t_end", "required: chain.force keeps doing "
                                          "work, so the run has no terminal state"))
-    involves = frozenset(k for k in overrides if k.startswith(("chain.", "walls.")))
+    involves = frozenset(k for k in overrides if k.startswith(("chain.", "walls."))
+                         or k == "replica")
     return [p._replace(involves=p.involves | involves) for p in problems]
+
+
+def _generator_sweep_issues(valid: dict[str, tuple], chain: Any) -> list[_Issue]:
+    """Sweeps of a generator's field, or replicas, on a chain without such a table
+    (the entries are dropped from ``valid``)."""
+    issues = []
+    for key in list(valid):
+        generator = _generator_key(key)
+        if generator is not None and isinstance(chain, Mapping) and not isinstance(
+                chain.get(generator[0]), Mapping):
+            issues.append(_Issue(f"chain.{generator[0]} is not a generator table "
+                                 f"(e.g. {{random = \"uniform\", ..., seed = 1}}): "
+                                 f"there is no {generator[1]} to sweep", (key,)))
+            valid.pop(key)
+    if "replica" in valid and isinstance(chain, Mapping) and not _random_keys(chain):
+        issues.append(_Issue("the chain draws no random values (a table with random = "
+                             "...): its replicas would be one run", (REPLICAS,)))
+        valid.pop("replica")
+    return issues
 
 
 def _validate(data: Any, source: str) -> Experiment:
@@ -1514,6 +1684,7 @@ def _validate(data: Any, source: str) -> Experiment:
     # data files named by the experiment are relative to its folder
     context = {"base_dir": os.path.dirname(os.path.abspath(source))}
     valid, named, sweep_issues = _check_sweep(data.get("sweep"))
+    sweep_issues += _generator_sweep_issues(valid, data.get("chain"))
     base = {key: value for key, value in data.items() if key != "sweep"}
     keys = list(valid)
 
@@ -1564,7 +1735,8 @@ def _validate(data: Any, source: str) -> Experiment:
             if not problems:
                 problems = _line_problems(merged, overrides, context)
         else:  # ... then only the tables the sweep changes
-            for table in dict.fromkeys(key.split(".")[0] for key in overrides):
+            for table in dict.fromkeys("chain" if key == "replica" else key.split(".")[0]
+                                       for key in overrides):
                 model = _MODEL_AT[(table,)]
                 if isinstance(merged[table], Mapping):
                     try:
@@ -1572,7 +1744,7 @@ def _validate(data: Any, source: str) -> Experiment:
                     except ValidationError as exc:
                         problems += _translate(exc, (table,))
             if not problems and any(k.startswith(("chain.", "walls.", "solver.t_end"))
-                                    for k in overrides):
+                                    or k == "replica" for k in overrides):
                 problems = _line_problems(merged, overrides, context)
         solver = merged.get("solver")
         if output is not None and (solver is None or isinstance(solver, Mapping)):
@@ -1582,6 +1754,7 @@ def _validate(data: Any, source: str) -> Experiment:
                 pass  # reported above
             else:
                 problems += _times_after_t_end(output.times, t_end)
+                problems += _sensor_problems(output, t_end)
         chain = merged.get("chain")
         if output is not None and output.sensors and isinstance(chain, Mapping):
             try:

@@ -65,6 +65,11 @@ OUTPUT_BYTES_PER_BALL = 13 * 8
 #: Bytes per snapshot time: the times in the run spec and the solver (2 x 8), and in
 #: the resolved config kept as a list and JSON text (about 40).
 BYTES_PER_TIME = 56
+#: Bytes per force sample of one sensor (a sample time by a sensor ball): the positions
+#: and velocities of its ball and two neighbours (6 x 8), in buffers that double as
+#: they fill (so twice that at worst), and its two forces and their mean (3 x 8) as
+#: they are written.
+BYTES_PER_SAMPLE = 2 * 6 * 8 + 3 * 8
 #: Fixed buffers: the solver's event buffer (2**16 events of 17 bytes, and a copy as it
 #: is flushed) and HDF5's chunk caches (1 MiB for each of a dozen datasets).
 FIXED_BYTES = 2 * (1 << 16) * 17 + 12 * (1 << 20)
@@ -82,7 +87,7 @@ def human_size(nbytes: float) -> str:
 
 
 def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = False,
-                        damped: bool = False) -> int:
+                        damped: bool = False, samples: int = 0) -> int:
     """Bytes of memory one run of ``n`` balls and ``n_snapshots`` snapshots needs.
 
     Parameters
@@ -97,6 +102,9 @@ def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = Fals
         them to the run file, so it does not.
     damped : bool
         Whether the line dissipates (``RunSpec.damped``): its state is larger.
+    samples : int
+        Force samples the run's sensors take (``RunSpec.sensor_samples``: sample
+        times by sensor balls).
 
     Returns
     -------
@@ -112,6 +120,7 @@ def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = Fals
              + (DAMPED_BYTES_PER_BALL if damped else 0))
         + window * WINDOW_BYTES_PER_BALL * 3 // 2  # the old window is freed after growing
         + t * BYTES_PER_TIME
+        + max(int(samples), 0) * BYTES_PER_SAMPLE
         + FIXED_BYTES
     )
     if keep_snapshots:
@@ -119,12 +128,13 @@ def estimate_run_memory(n: int, n_snapshots: int, *, keep_snapshots: bool = Fals
     return int(total)
 
 
-def estimate_file_size(n: int, n_snapshots: int) -> int:
+def estimate_file_size(n: int, n_snapshots: int, samples: int = 0) -> int:
     """Bytes of a run file before compression: ``T * N * 2 * 8`` for the snapshots,
-    plus the per-ball results (4 arrays of N float64) and the per-snapshot observables."""
+    plus the per-ball results (4 arrays of N float64), the per-snapshot observables
+    and the sensors' samples (two forces and their mean, 3 x 8 bytes each)."""
     n = max(int(n), 1)
     t = max(int(n_snapshots), 0)
-    return 2 * 8 * t * n + 4 * 8 * n + 4 * 8 * 4 * t
+    return 2 * 8 * t * n + 4 * 8 * n + 5 * 8 * t + 3 * 8 * max(int(samples), 0)
 
 
 def memory_available() -> int | None:
@@ -153,7 +163,7 @@ def memory_available() -> int | None:
 
 
 def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
-                 runs_at_once: int = 1, damped: bool = False) -> int:
+                 runs_at_once: int = 1, damped: bool = False, samples: int = 0) -> int:
     """Refuse a run that would not fit in memory.
 
     Parameters
@@ -167,6 +177,8 @@ def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
         Runs of this size computed at once on this machine (``--jobs``).
     damped : bool
         Whether the line dissipates (its state is larger).
+    samples : int
+        Force samples of the run's sensors.
 
     Returns
     -------
@@ -178,12 +190,14 @@ def check_memory(n: int, n_snapshots: int, available: int | None = None, *,
     ChainrunError
         One line with the estimate and the memory available.
     """
-    need = estimate_run_memory(n, n_snapshots, damped=damped)
+    need = estimate_run_memory(n, n_snapshots, damped=damped, samples=samples)
     if available is None:
         available = memory_available()
     together = need * max(int(runs_at_once), 1)
     if available is not None and together > available:
-        what = f"a run of N = {n} balls with {n_snapshots} snapshots"
+        what = f"a run of N = {n} balls with {n_snapshots} snapshots" + (
+            f" and {samples} force samples (output.sensor_dt, output.sensor_end)"
+            if samples else "")
         times = "" if runs_at_once <= 1 else f" ({runs_at_once} at once: {human_size(together)})"
         raise ChainrunError(
             f"{what} needs about {human_size(need)} of memory{times}, "
@@ -247,7 +261,8 @@ def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = 
     Parameters
     ----------
     specs : list of RunSpec
-        The runs to compute (``n``, ``times`` and ``damped`` are used).
+        The runs to compute (``n``, ``times``, ``damped`` and ``sensor_samples`` are
+        used).
     folder : path
         The output folder.
     runs_at_once : int
@@ -256,11 +271,11 @@ def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = 
     specs = list(specs)
     if not specs:
         return []
-    sizes = [(int(s.n), len(s.times), s.damped) for s in specs]
-    n, t, damped = max(sizes, key=lambda ntd: estimate_run_memory(ntd[0], ntd[1],
-                                                                  damped=ntd[2]))
-    check_memory(n, t, available=available, damped=damped,
+    sizes = [(int(s.n), len(s.times), s.damped, s.sensor_samples) for s in specs]
+    n, t, damped, samples = max(sizes, key=lambda run: estimate_run_memory(
+        run[0], run[1], damped=run[2], samples=run[3]))
+    check_memory(n, t, available=available, damped=damped, samples=samples,
                  runs_at_once=min(max(int(runs_at_once), 1), len(specs)))
-    total = sum(estimate_file_size(n, t) for n, t, _ in sizes)
+    total = sum(estimate_file_size(n, t, samples) for n, t, _, samples in sizes)
     warning = _disk_warning(total, len(specs), folder, free)
     return [] if warning is None else [warning]

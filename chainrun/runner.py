@@ -198,7 +198,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     from chainrun.solver import load_kernels, simulate_line, velocity_floor
     from chainrun.store import RunWriter
 
-    check_memory(spec.n, len(spec.times), damped=spec.damped)
+    check_memory(spec.n, len(spec.times), damped=spec.damped, samples=spec.sensor_samples)
     line = spec.line  # built here, on the worker: as long as the line (ConfigError if wrong)
     # numba loads the kernels on their first call; the run's wall time is its solve's
     load_kernels()
@@ -208,7 +208,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         sol = simulate_line(
             line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
             max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
-            sensors=spec.sensors, sensor_dt=spec.sensor_dt,
+            sensors=spec.sensors, sensor_dt=spec.sensor_dt, sensor_end=spec.sensor_end,
         )
         writer.finish(sol)
     d = sol.diagnostics

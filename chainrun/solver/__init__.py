@@ -171,7 +171,7 @@ class Solution:
     sensor_balls : ndarray of int64, shape (S,)
         The sensor balls, numbered from 1 (empty without sensors).
     sensor_time : ndarray, shape (M,)
-        The sample times: 0, dt, 2 dt, ... up to ``end_time``.
+        The sample times: 0, dt, 2 dt, ... up to ``end_time`` (or ``sensor_end``).
     sensor_force : ndarray, shape (M, S, 2)
         The contact forces on each sensor ball at each sample, on its side towards
         ball 1 and on its far side (0 at the line's ends, unless a wall is there); an
@@ -265,6 +265,7 @@ def simulate(
     on_progress: ProgressHook | None = None,
     sensors=(),
     sensor_dt: float | None = None,
+    sensor_end: float | None = None,
     closed_form: bool = True,
 ) -> Solution:
     """Run one line of balls to its terminal state (or to ``t_end``).
@@ -293,10 +294,13 @@ def simulate(
         Called between output times and periodically during long stretches.
     sensors : sequence of int, optional
         Balls (numbered from 1) whose contact forces are sampled every ``sensor_dt``
-        from t = 0 to the end of the run (``Solution.sensor_force``), exactly, from
-        the step containing each sample; the cost grows with the samples, not with N.
+        from t = 0 to ``sensor_end`` or the end of the run, the earlier
+        (``Solution.sensor_force``), exactly, from the step containing each sample;
+        the cost grows with the samples, not with N.
     sensor_dt : float, optional
         The sampling interval, > 0; required with ``sensors``.
+    sensor_end : float, optional
+        The last time a sample may be taken (> 0); by default the end of the run.
     closed_form : bool
         Take an isolated binary collision (two free balls, or a ball and a wall, that
         no third body can reach while they touch) whole: its outcome and duration are
@@ -314,7 +318,7 @@ def simulate(
     return run(
         n, k, alpha, times, t_end=t_end, rtol=rtol, max_events=max_events,
         on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
-        sensor_dt=sensor_dt, closed_form=closed_form,
+        sensor_dt=sensor_dt, sensor_end=sensor_end, closed_form=closed_form,
     )
 
 
@@ -329,6 +333,7 @@ def simulate_line(
     on_progress: ProgressHook | None = None,
     sensors=(),
     sensor_dt: float | None = None,
+    sensor_end: float | None = None,
     closed_form: bool = True,
 ) -> Solution:
     """Run any ``Line`` (masses, stiffnesses, exponents, gaps, walls, forces) to its
@@ -342,7 +347,7 @@ def simulate_line(
     return run_line(
         line, times, t_end=t_end, rtol=rtol, max_events=max_events,
         on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
-        sensor_dt=sensor_dt, closed_form=closed_form,
+        sensor_dt=sensor_dt, sensor_end=sensor_end, closed_form=closed_form,
     )
 
 

@@ -335,46 +335,57 @@ def _grow(S: _state.State, need: int) -> _state.State:
     return S._replace(**window)
 
 
-def _check_sensors(sensors, sensor_dt, n):
+def _check_sensors(sensors, sensor_dt, sensor_end, n):
     balls = np.asarray(sensors, dtype=np.int64).reshape(-1)
     if balls.size == 0:
-        return balls, None
+        return balls, None, None
     if np.any(balls < 1) or np.any(balls > n) or np.unique(balls).size != balls.size:
         raise ValueError(f"sensors must be distinct ball numbers within 1..{n}, "
                          f"got {balls.tolist()}")
     if sensor_dt is None or not (math.isfinite(sensor_dt) and sensor_dt > 0):
         raise ValueError(f"sensor_dt must be a finite number > 0 with sensors, "
                          f"got {sensor_dt!r}")
-    return balls, float(sensor_dt)
+    if sensor_end is not None and not (math.isfinite(sensor_end) and sensor_end > 0):
+        raise ValueError(f"sensor_end must be a finite number > 0, got {sensor_end!r}")
+    return balls, float(sensor_dt), sensor_end
+
+
+#: Samples a sensor's buffers start with; they double as they fill.
+_SAMPLE_ROWS = 1024
 
 
 class _Sensors:
     """The samples of the sensor balls' neighbourhoods: internal positions (and
     velocities, for a damped law) of balls b-1, b, b+1 (a wall's included) at t = 0,
-    dt, 2 dt, ... (in the units of the scales), turned into the contact forces on each
-    side of b."""
+    dt, 2 dt, ... up to ``end`` (in the units of the scales), turned into the contact
+    forces on each side of b. Kept in arrays, a row per sample."""
 
-    def __init__(self, balls, dt, P: _Prepared):
+    def __init__(self, balls, dt, end, P: _Prepared):
         self.balls, self.dt, self.P = balls, dt, P
+        self.end = math.inf if end is None else end
         inner = balls - 1 + P.lw  # internal indices
         near = np.concatenate([inner - 1, inner, inner + 1])
         self.probe = np.unique(near[(near >= 0) & (near < P.nb)]).astype(np.int64)
-        self.times, self.rows, self.vrows = [], [], []
+        rows = _SAMPLE_ROWS if balls.size else 0
+        self.rows = np.empty((rows, self.probe.size))
+        self.vrows = np.empty((rows, self.probe.size))
         self.count = 0
 
     def next_time(self):
-        return self.count * self.dt if self.balls.size else math.inf
+        t = self.count * self.dt if self.balls.size else math.inf
+        return t if t <= self.end else math.inf
 
     def take(self, t, positions, velocities):
-        self.times.append(t)
-        self.rows.append(np.array(positions, dtype=float))
-        self.vrows.append(np.array(velocities, dtype=float))
+        if self.count == self.rows.shape[0]:
+            self.rows = np.concatenate([self.rows, np.empty_like(self.rows)])
+            self.vrows = np.concatenate([self.vrows, np.empty_like(self.vrows)])
+        self.rows[self.count] = positions
+        self.vrows[self.count] = velocities
         self.count += 1
 
     def forces(self):
         P = self.P
-        y = np.array(self.rows).reshape(len(self.rows), self.probe.size)
-        u = np.array(self.vrows).reshape(len(self.vrows), self.probe.size)
+        y, u = self.rows[:self.count], self.vrows[:self.count]
         where = {int(b): i for i, b in enumerate(self.probe)}
         out = np.zeros((y.shape[0], self.balls.size, 2))
         for s, ball in enumerate(self.balls - 1 + P.lw):
@@ -386,7 +397,7 @@ class _Sensors:
                     out[:, s, side] = contact_forces(
                         np.stack([y[:, where[a]], y[:, where[b]]], axis=-1),
                         P.alpha[a], P.kappa[a], **damping)[:, 0]
-        return np.array(self.times) * P.scales.time, out * P.scales.force
+        return self.dt * np.arange(self.count) * P.scales.time, out * P.scales.force
 
 
 def run(n, k, alpha, times=(), **kw) -> Solution:
@@ -397,7 +408,7 @@ def run(n, k, alpha, times=(), **kw) -> Solution:
 
 def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
              on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None,
-             closed_form=True) -> Solution:
+             sensor_end=None, closed_form=True) -> Solution:
     """See ``chainrun.solver.simulate_line``: the run in the units of the line's scales,
     its inputs and results converted at the edges."""
     if not isinstance(line, Line):
@@ -406,7 +417,8 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     if t_end is None and not line.has_terminal_state:
         raise ValueError("this line has no terminal state (an external force keeps "
                          "doing work, or walls hold it at both ends): give t_end")
-    sensor_balls, sensor_dt = _check_sensors(sensors, sensor_dt, line.n)
+    sensor_balls, sensor_dt, sensor_end = _check_sensors(sensors, sensor_dt, sensor_end,
+                                                         line.n)
     P = _Prepared(line)
     sc = P.scales
     tscale = sc.time
@@ -441,7 +453,8 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         ev_k.append(S.ev_k[:m].copy())
         S.ints[_state.I_NEV] = 0
 
-    sensing = _Sensors(sensor_balls, None if sensor_dt is None else sensor_dt / tscale, P)
+    sensing = _Sensors(sensor_balls, None if sensor_dt is None else sensor_dt / tscale,
+                       None if sensor_end is None else sensor_end / tscale, P)
     S = S._replace(probe=sensing.probe)
     nout = 0
 

@@ -118,6 +118,28 @@ def test_check_memory_counts_runs_at_once():
         limits.check_memory(10**7, 10, available=2 * need, runs_at_once=4)
 
 
+def test_force_samples_are_counted_at_the_solvers_own_bytes():
+    """A sensor's samples cost what the solver's buffers hold for them (its ball and
+    two neighbours, positions and velocities, in buffers that double) and what is
+    written (two forces and their mean): the estimate counts each, and a run with too
+    many says which keys to change."""
+    from chainrun.solver import Line, _driver
+
+    P = _driver._Prepared(Line.make(20, k=1, alpha=1.5))
+    sensors = _driver._Sensors(np.array([5, 12]), 0.1, None, P)
+    taken = 3000
+    for i in range(taken):
+        sensors.take(0.1 * i, np.zeros(sensors.probe.size), np.zeros(sensors.probe.size))
+    held = sensors.rows.nbytes + sensors.vrows.nbytes
+    written = sensors.forces()[1].nbytes * 3 // 2  # forces, and their mean
+    assert (held + written) / (taken * 2) <= limits.BYTES_PER_SAMPLE
+    assert (limits.estimate_run_memory(100, 10, samples=10**6)
+            - limits.estimate_run_memory(100, 10)) == 10**6 * limits.BYTES_PER_SAMPLE
+    with pytest.raises(ChainrunError, match="force samples .output.sensor_dt, "
+                                            "output.sensor_end. needs about"):
+        limits.check_memory(100, 10, available=GB, samples=10**8)
+
+
 def test_absurd_n_is_refused_on_this_machine():
     with pytest.raises(ChainrunError, match="memory"):
         limits.check_memory(2**62, 2)

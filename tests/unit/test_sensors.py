@@ -73,7 +73,44 @@ def test_sensor_keys_are_checked_with_the_key_named():
         with pytest.raises(ConfigError) as exc:
             parse_experiment(base + text, "toml").runs()
         assert message in str(exc.value), text
-    (spec,) = parse_experiment(base + "sensors = [2, 5]\nsensor_dt = 0.1", "toml").runs()
-    assert (spec.sensors, spec.sensor_dt) == ((2, 5), 0.1)
+    (spec,) = parse_experiment(base + "sensors = [2, 5]\nsensor_dt = 0.1\nsensor_end = 3.0",
+                               "toml").runs()
+    assert (spec.sensors, spec.sensor_dt, spec.sensor_end) == ((2, 5), 0.1, 3.0)
+    assert spec.sensor_samples == 31 * 2  # t = 0, 0.1, ..., 3.0 on two balls
     with pytest.raises(ValueError, match="sensor_dt"):
         simulate(5, 1, 1.5, sensors=[2])
+
+
+def test_sensors_stop_where_the_file_says_and_are_counted_before_the_run():
+    base = 'name = "x"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n[output]\n'
+    base += "sensors = [2]\n"
+    cases = {  # what the sensors' end is by default, or why there is none
+        "sensor_dt = 0.1\n[solver]\nt_end = 4.0": 4.0,
+        "sensor_dt = 0.1\ntimes = [0.0, 2.5]": 2.5,
+        "sensor_dt = 0.1\ntimes = [0.0, 2.5]\n[solver]\nt_end = 4.0": 4.0,
+        "sensor_dt = 0.1\nsensor_end = 1.5\n[solver]\nt_end = 4.0": 1.5,
+        "sensor_dt = 0.1": "output.sensor_end: required with output.sensors on a run to "
+                           "its terminal state",
+        # four sensors at 7.8 million times: refused, naming what to change
+        "sensor_dt = 0.01\ntimes = [0.0, 78000.0]\n": None,
+        "sensor_dt = 1.0e-6\nsensor_end = 20.0":
+            "stop sooner with output.sensor_end",
+    }
+    many = base.replace("[2]", "[1, 2, 3, 4]") + "sensor_dt = 0.01\ntimes = [0.0, 78000.0]"
+    with pytest.raises(ConfigError, match=r"output.sensor_dt: 4 sensors every 0.01 up to "
+                                          r"78000 \(output.times\) take 3.12e\+07 samples"):
+        parse_experiment(many, "toml")
+    for text, want in cases.items():
+        if want is None:  # one sensor at those times: within the limit
+            parse_experiment(base + text, "toml")
+        elif isinstance(want, float):
+            (spec,) = parse_experiment(base + text, "toml").runs()
+            assert spec.sensor_end == want, text
+        else:
+            with pytest.raises(ConfigError) as exc:
+                parse_experiment(base + text, "toml")
+            assert want in str(exc.value), text
+            assert len(str(exc.value).splitlines()) == 1
+    sol = simulate(5, 1, 1.5, sensors=[2], sensor_dt=0.1, sensor_end=1.55)
+    np.testing.assert_allclose(sol.sensor_time, 0.1 * np.arange(16))
+    assert sol.end_time > 3.0  # the run goes on; its sensors stopped

@@ -1,0 +1,126 @@
+"""Ensembles over random seeds: a generator's seed swept, or a replica count; the runs
+read as one Dataset (``chainrun.open_sweep``), summarised (``chainrun info``) and drawn
+(``chainrun plot``) as an ensemble."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from helpers import simulate_text
+
+import chainrun
+from chainrun.cli import main
+from chainrun.config import parse_experiment
+from chainrun.errors import ConfigError
+from chainrun.plotting import style
+from chainrun.plotting.views import draw_ensemble, is_ensemble
+from chainrun.store import read_index, read_run
+
+DISORDER = """name = "disorder"
+[chain]
+n = 24
+k = 1
+alpha = 1.5
+mass = {random = "uniform", low = 1.0, high = 3.0, seed = 11}
+stiffness = {random = "uniform", low = 1.0, high = 2.0, seed = 40}
+[output]
+times = {start = 0, stop = 60, step = 3}
+[sweep]
+"""
+
+
+@pytest.fixture(scope="module")
+def seeds(tmp_path_factory):
+    """Eight disordered lines, their masses' seed swept."""
+    text = DISORDER + '"chain.mass.seed" = [1, 2, 3, 4, 5, 6, 7, 8]\n'
+    return simulate_text(tmp_path_factory.mktemp("seeds"), text, "disorder")
+
+
+def test_a_swept_seed_draws_each_runs_values_with_its_own_seed(seeds):
+    for seed in range(1, 9):
+        run = read_run(seeds / f"mass_seed={seed}.h5")
+        want = np.random.default_rng(seed).uniform(1.0, 3.0, 24)  # the generator's rule
+        np.testing.assert_array_equal(run.line.mass, want)
+        np.testing.assert_array_equal(  # the stiffnesses keep the file's seed
+            run.line.stiffness, np.random.default_rng(40).uniform(1.0, 2.0, 23))
+        assert run.parameters["overrides"] == {"chain.mass.seed": seed}
+
+
+def test_open_sweep_is_the_runs_side_by_side(seeds):
+    ds = chainrun.open_sweep(seeds)
+    files = [read_run(seeds / str(row["file"])) for row in read_index(seeds / "index.h5")]
+    assert ds.sizes["run"] == 8 and ds.final_velocity.dims == ("run", "ball")
+    assert list(ds["chain.mass.seed"].values) == list(range(1, 9))
+    assert list(ds.run.values) == [f"mass_seed={s}" for s in range(1, 9)]
+    finals = np.array([f.final_velocity for f in files])
+    np.testing.assert_array_equal(ds.final_velocity.values, finals)
+    np.testing.assert_allclose(ds.final_velocity.mean("run").values, finals.mean(axis=0),
+                               rtol=1e-15, atol=1e-17)
+    # the event logs, of different lengths, stay readable run by run
+    counts = [f.event_time.size for f in files]
+    assert len(set(counts)) > 1 and list(ds.event_count.values) == counts
+    for r, f in enumerate(files):
+        np.testing.assert_array_equal(ds.event_time.isel(run=r)[:counts[r]], f.event_time)
+        np.testing.assert_array_equal(ds.event_contact.isel(run=r)[:counts[r]],
+                                      f.event_contact)
+        assert np.all(ds.event_contact.isel(run=r)[counts[r]:] == -1)
+    assert list(ds.outcome.values) == ["terminal"] * 8
+    assert ds.attrs["experiment"] == "disorder" and "outcome" not in ds.attrs
+
+
+def test_info_and_plot_treat_the_folder_as_an_ensemble(seeds, tmp_path):
+    files = [read_run(seeds / str(row["file"])) for row in read_index(seeds / "index.h5")]
+    out = CliRunner().invoke(main, ["info", str(seeds)]).stdout
+    rebound = next(line for line in out.splitlines() if "rebound (balls)" in line)
+    mean, sd = (float(x) for x in re.search(r"([\d.]+) \+- ([\d.]+)", rebound).groups())
+    counts = [int(np.sum(f.final_velocity < 0)) for f in files]
+    assert mean == pytest.approx(np.mean(counts), rel=1e-3)
+    assert sd == pytest.approx(np.std(counts, ddof=1), rel=1e-3)
+    assert is_ensemble(files)
+    with style(colour=True):
+        figure = draw_ensemble(files)
+    finals = np.array([f.final_velocity for f in files])
+    (mean_line,) = [a for a in figure.axes[0].get_lines() if a.get_gid() == "final_velocity/mean"]
+    np.testing.assert_allclose(mean_line.get_ydata(), finals.mean(axis=0), rtol=1e-12)
+    left = np.array([f.observables["kinetic_energy"] + f.observables["potential_energy"]
+                     for f in files])
+    (energy,) = [a for a in figure.axes[1].get_lines() if a.get_gid() == "energy/mean"]
+    np.testing.assert_allclose(energy.get_ydata(), left.mean(axis=0), rtol=1e-12)
+    result = CliRunner().invoke(main, ["plot", str(seeds), "--what", "final", "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "ensemble.png").is_file() and not (tmp_path / "sweep-final.png").exists()
+
+
+def test_replicas_move_every_random_seed_on():
+    specs = parse_experiment(DISORDER + "replicas = 3\n", "toml").runs()
+    assert [s.run_id for s in specs] == ["replica=0", "replica=1", "replica=2"]
+    for r, spec in enumerate(specs):
+        assert spec.overrides == {"replica": r}
+        np.testing.assert_array_equal(
+            spec.line.mass, np.random.default_rng(11 + r).uniform(1.0, 3.0, 24))
+        np.testing.assert_array_equal(
+            spec.line.stiffness, np.random.default_rng(40 + r).uniform(1.0, 2.0, 23))
+    assert len({s.config_hash for s in specs}) == 3
+
+
+@pytest.mark.parametrize(("sweep", "message"), [
+    ("replicas = 0", "sweep.replicas: expected a number of runs from 1 to 10000, got 0"),
+    ('replicas = 2\n"chain.mass.seed" = [1, 2]',
+     "sweep.replicas: give replicas or a sweep of seeds (chain.mass.seed), not both"),
+    ('"chain.alpha.seed" = [1, 2]',
+     "sweep.chain.alpha.seed: chain.alpha is not a generator table"),
+    ('"chain.mass.colour" = [1, 2]', "sweep: unknown key 'chain.mass.colour'"),
+])
+def test_bad_ensembles_are_named(sweep, message):
+    with pytest.raises(ConfigError) as exc:
+        parse_experiment(DISORDER + sweep + "\n", "toml")
+    assert message in str(exc.value)
+
+
+def test_a_line_without_random_values_has_no_replicas():
+    text = 'name = "x"\n[chain]\nn = 4\nk = 1\nalpha = 1.5\n[sweep]\nreplicas = 3\n'
+    with pytest.raises(ConfigError, match="sweep.replicas: the chain draws no random values"):
+        parse_experiment(text, "toml")
