@@ -11,6 +11,15 @@ from chainrun.cli.common import fail
 from chainrun.errors import ChainrunError
 
 
+def _ensemble(folder: Path):
+    """The statistics of the runs in ``folder`` if they are an ensemble, else None."""
+    from chainrun.analysis.ensemble import ensemble, is_ensemble
+    from chainrun.store import read_index, read_run
+
+    runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    return ensemble(runs) if is_ensemble(runs) else None
+
+
 @click.command()
 @click.argument("names", nargs=-1)
 @click.option("--all", "all_", is_flag=True,
@@ -106,7 +115,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                     paths = render_run(path, views, out=out, log=log)
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
                 if folder.is_dir() and len(files) > 1 and (folder / "index.h5").is_file():
-                    paths = render_sweep(folder, numbers, out=out, log=log)
+                    paths = render_sweep(folder, numbers, out=out, log=log,
+                                         ensemble=_ensemble(folder))
                     click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
             except ChainrunError as exc:
                 fail(str(exc))

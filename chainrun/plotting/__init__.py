@@ -157,14 +157,15 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
     return written
 
 
-def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False) -> list[Path]:
+def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
+                 ensemble=None) -> list[Path]:
     """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
     ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
-    final velocities of ``balls`` against each swept key (``sweep-final``); or, for an
-    ensemble (runs that differ only in their random seeds), the mean and spread of its
-    runs (``ensemble``) instead of the latter. Returns the files written."""
-    from chainrun.plotting.views import (draw_ensemble, draw_sweep, draw_sweep_runs,
-                                         is_ensemble)
+    final velocities of ``balls`` against each swept key (``sweep-final``); or, given
+    the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
+    differ only in their random seeds), its mean and spread (``ensemble``) instead of
+    the latter. Returns the files written."""
+    from chainrun.plotting.views import draw_ensemble, draw_sweep, draw_sweep_runs
     from chainrun.store import read_index, read_run
 
     folder = Path(folder)
@@ -173,7 +174,7 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False) -> list[
     out.mkdir(parents=True, exist_ok=True)
     written = []
     with style(colour=True):
-        first = (("ensemble", draw_ensemble(runs)) if is_ensemble(runs)
+        first = (("ensemble", draw_ensemble(ensemble, runs[0])) if ensemble is not None
                  else ("sweep-final", draw_sweep(runs, balls)))
         for name, figure in (first, ("sweep-runs", draw_sweep_runs(runs, log=log))):
             outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]

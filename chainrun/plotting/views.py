@@ -6,8 +6,8 @@ wave front shows), ``forces`` (contact force over contact and time), ``profiles`
 ``final`` (final velocity of every ball), ``energy`` (kinetic, contact and dissipated
 energy over time, and their sum) and ``sensors`` (the force sensors' traces).
 ``draw_sweep`` draws a sweep's final velocities against its swept keys,
-``draw_sweep_runs`` a panel per run, and ``draw_ensemble`` the mean and spread of an
-ensemble's runs (the same line over random seeds).
+``draw_sweep_runs`` a panel per run, and ``draw_ensemble`` the statistics of an
+ensemble's runs (the same line over random seeds; ``chainrun.analysis.ensemble``).
 
 Every axis is in the run's own units (``chainrun.units``: SI with a readable prefix, or
 the paper's units); lines take a colour-blind-safe colour cycle with distinct line
@@ -27,7 +27,7 @@ from chainrun.plotting.common import MARKERS
 from chainrun.units import axis_label, format_value, scale_for
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
-           "draw_view", "is_ensemble"]
+           "draw_view"]
 
 VIEWS = ("spacetime", "forces", "profiles", "displacements", "final", "energy", "sensors")
 #: an image wider than this many balls shows every s-th ball (the file is read so)
@@ -273,14 +273,6 @@ def _overrides(run) -> dict:
     return run.parameters.get("overrides", {})
 
 
-def is_ensemble(runs) -> bool:
-    """Whether the runs are one line over random draws: more than one, and every swept
-    key a generator's seed or the replica number."""
-    keys = {key for run in runs for key in _overrides(run)}
-    return len(runs) > 1 and bool(keys) and all(
-        key == "replica" or key.endswith(".seed") for key in keys)
-
-
 def draw_sweep(runs, balls=(1, -1)) -> Figure:
     """Final velocities of ``balls`` against each swept key, a panel per key.
 
@@ -352,54 +344,44 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
     return figure
 
 
-def draw_ensemble(runs) -> Figure:
-    """The ensemble of ``runs`` (one line over random draws): the mean final velocity of
-    each ball with its standard deviation and range over the runs, and the energy left
-    in the line (kinetic and contact) over time, each run's and their mean.
-
-    Raises
-    ------
-    ChainrunError
-        If the runs' lines differ in length.
-    """
-    if len({run.n for run in runs}) != 1:
-        raise ChainrunError("an ensemble's runs must have lines of one length")
-    keys = {key for run in runs for key in _overrides(run)}
-    units = runs[0].units
-    finals = np.array([np.asarray(run.final_velocity) for run in runs])
-    mean, sd = finals.mean(axis=0), finals.std(axis=0, ddof=1)
-    same_times = all(run.times.size >= 2 and np.array_equal(run.times, runs[0].times)
-                     for run in runs)
-    figure = Figure(figsize=(9.6 if same_times else 4.8, 3.8), layout="constrained")
-    axes = figure.add_subplot(1, 2 if same_times else 1, 1)
-    label, scaled = axis_label("final velocity", "velocity", units, finals)
-    balls = np.arange(1, finals.shape[1] + 1)
-    axes.fill_between(balls, scaled(finals.min(axis=0)), scaled(finals.max(axis=0)),
-                      alpha=0.18, linewidth=0, label="range", gid="final_velocity/range")
-    axes.fill_between(balls, scaled(mean - sd), scaled(mean + sd), alpha=0.35, linewidth=0,
+def draw_ensemble(stats, run) -> Figure:
+    """An ensemble (``chainrun.analysis.ensemble.Ensemble``; ``run`` one of its runs,
+    for the title): the mean final velocity of each ball with its standard deviation
+    and range over the runs, and the energy left in the line over time, each run's and
+    their mean (where the runs share their snapshot times)."""
+    final, units = stats.final, stats.units
+    two = stats.energy_left is not None
+    figure = Figure(figsize=(9.6 if two else 4.8, 3.8), layout="constrained")
+    axes = figure.add_subplot(1, 2 if two else 1, 1)
+    label, scaled = axis_label("final velocity", "velocity", units,
+                               np.concatenate([final["min"], final["max"]]))
+    balls = np.arange(1, final["mean"].size + 1)
+    axes.fill_between(balls, scaled(final["min"]), scaled(final["max"]), alpha=0.18,
+                      linewidth=0, label="range", gid="final_velocity/range")
+    axes.fill_between(balls, scaled(final["mean"] - final["sd"]),
+                      scaled(final["mean"] + final["sd"]), alpha=0.35, linewidth=0,
                       label="mean ± standard deviation", gid="final_velocity/sd")
-    axes.plot(balls, scaled(mean), label=f"mean of {len(runs)} runs",
+    axes.plot(balls, scaled(final["mean"]), label=f"mean of {stats.runs} runs",
               gid="final_velocity/mean")
     axes.axhline(0.0, color="0.6", linewidth=0.6)
     axes.set_xlabel("ball")
     _integer_axis(axes.xaxis)
     axes.set_ylabel(label)
     axes.legend(fontsize="small")
-    if same_times:
+    if two:
         axes = figure.add_subplot(1, 2, 2)
-        left = np.array([run.observables["kinetic_energy"] + run.observables["potential_energy"]
-                         for run in runs])
-        label, scaled = axis_label("energy left in the line", "energy", units, left)
-        t = _time_axis(axes, runs[0], runs[0].times)(runs[0].times)
-        for i, row in enumerate(left):
-            axes.plot(t, scaled(row), color="0.7", linestyle="-", linewidth=0.6,
+        t = _time_axis(axes, run, stats.times)(stats.times)
+        for i, row in enumerate(stats.energy_left):
+            axes.plot(t, 100.0 * row, color="0.7", linestyle="-", linewidth=0.6,
                       label="each run" if i == 0 else None, gid=f"energy/{i}")
-        axes.plot(t, scaled(left.mean(axis=0)), color="black", linestyle="-", linewidth=1.4,
-                  label="mean", gid="energy/mean")
-        axes.set_ylabel(label)
+        axes.plot(t, 100.0 * stats.energy_left.mean(axis=0), color="black", linestyle="-",
+                  linewidth=1.4, label="mean", gid="energy/mean")
+        axes.set_ylabel("energy left in the line (% of the impact energy)")
+        axes.set_ylim(0.0, None)
         axes.legend(fontsize="small")
-    experiment = runs[0].parameters.get("experiment", "")
-    figure.suptitle("\n".join([f"{experiment}: an ensemble of {len(runs)} runs"]
-                              + [describe(runs[0], keys, 80 if same_times else 40)]),
+    keys = run.parameters.get("overrides", {})
+    experiment = run.parameters.get("experiment", "")
+    figure.suptitle("\n".join([f"{experiment}: an ensemble of {stats.runs} runs"]
+                              + [describe(run, keys, 80 if two else 40)]),
                     fontsize="small")
     return figure

@@ -16,7 +16,8 @@ from chainrun.cli import main
 from chainrun.config import parse_experiment
 from chainrun.errors import ConfigError
 from chainrun.plotting import style
-from chainrun.plotting.views import draw_ensemble, is_ensemble
+from chainrun.analysis.ensemble import ensemble, is_ensemble
+from chainrun.plotting.views import draw_ensemble
 from chainrun.store import read_index, read_run
 
 DISORDER = """name = "disorder"
@@ -81,14 +82,16 @@ def test_info_and_plot_treat_the_folder_as_an_ensemble(seeds, tmp_path):
     assert sd == pytest.approx(np.std(counts, ddof=1), rel=1e-3)
     assert is_ensemble(files)
     with style(colour=True):
-        figure = draw_ensemble(files)
+        figure = draw_ensemble(ensemble(files), files[0])
     finals = np.array([f.final_velocity for f in files])
     (mean_line,) = [a for a in figure.axes[0].get_lines() if a.get_gid() == "final_velocity/mean"]
     np.testing.assert_allclose(mean_line.get_ydata(), finals.mean(axis=0), rtol=1e-12)
-    left = np.array([f.observables["kinetic_energy"] + f.observables["potential_energy"]
-                     for f in files])
+    # an elastic line keeps its impact energy, m_1 v_1^2 / 2: all of it is left
+    left = np.array([(f.observables["kinetic_energy"] + f.observables["potential_energy"])
+                     / (0.5 * f.line.mass[0]) for f in files])
     (energy,) = [a for a in figure.axes[1].get_lines() if a.get_gid() == "energy/mean"]
-    np.testing.assert_allclose(energy.get_ydata(), left.mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(energy.get_ydata(), 100 * left.mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(energy.get_ydata(), 100.0, rtol=1e-9)
     result = CliRunner().invoke(main, ["plot", str(seeds), "--what", "final", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "ensemble.png").is_file() and not (tmp_path / "sweep-final.png").exists()

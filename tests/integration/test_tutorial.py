@@ -27,3 +27,15 @@ def test_the_tutorial_runs(tmp_path):
             assert ours == pytest.approx(float(printed), abs=tolerance)
     assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == [
         "run-final.pdf", "run-final.png", "run-spacetime.pdf", "run-spacetime.png"]
+    # real beads in SI: the mass of an 8 mm sphere of 8000 kg/m^3, and the energy balance
+    beads = [line for line in lines if line.startswith("beads:")]
+    grams = float(beads[0].split()[1])
+    assert grams == pytest.approx(8000 * 3.141592653589793 * 0.008**3 / 6 * 1e3, rel=1e-4)
+    assert "kg" in beads[0] and "N m-alpha" in beads[0]
+    peaks = [float(line.split("peak force ")[1].split()[0]) for line in beads
+             if "peak force" in line]
+    assert len(peaks) == 2 and peaks[0] > peaks[1] > 0  # the damped wave weakens
+    assert float(beads[-1].split("balance to ")[1].split(",")[0]) < 1e-9
+    ensemble = [line for line in lines if line.startswith("ensemble")]
+    assert ensemble[0].startswith("ensemble: 8 runs")
+    assert "ensemble.png" in ensemble[1] and "sweep-runs.png" in ensemble[1]
