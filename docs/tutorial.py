@@ -92,7 +92,7 @@ beads = chainrun.simulate(
     solver={"t_end": 3.0e-4},
 )
 # The line is in the Dataset, per ball and per contact, with its units.
-print(f"beads: {beads.mass.values[0] * 1e3:.3f} g each ({beads.mass.attrs['units']}), "
+print(f"beads: {beads.mass.values[0] * 1e3:.5f} g each ({beads.mass.attrs['units']}), "
       f"contact stiffness {beads.stiffness.values[0]:.4g} {beads.stiffness.attrs['units']}")
 # What the sensors measured: the largest mean contact force on each sensor ball, in N.
 peaks = beads.sensor_mean_force.max("sample")

@@ -200,8 +200,8 @@ def cradle(inputs: Inputs) -> Result:
 
 # ------------------------------------------------------------------------------- wall
 def _wall_contact(run) -> tuple[float, float, int]:
-    """``gm.wall_contact`` of the right wall (contact N - 1) of a run."""
-    return gm.wall_contact(run.event_time, run.event_contact, run.event_kind, run.n - 1)
+    """``gm.wall_contact`` of the right wall (contact N) of a run."""
+    return gm.wall_contact(run.event_time, run.event_contact, run.event_kind, run.n)
 
 
 def _column_restitution(run) -> float:

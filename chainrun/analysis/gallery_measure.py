@@ -176,7 +176,8 @@ def wall_contact(event_time, event_contact, event_kind, contact: int
     event_contact, event_kind : ndarray of int, shape (E,)
         The run's events (``RunData.event_*``).
     contact : int
-        The wall's contact (0-based; the right wall of N balls is N - 1).
+        The wall's contact, numbered as the run file numbers contacts (the right wall
+        of N balls is N, the left wall 0).
 
     Returns
     -------

@@ -71,7 +71,13 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
     rtol (accuracy, default 1e-12), max_events. Optional [output] keys besides
     times: sensors (ball numbers) and sensor_dt, to sample the contact forces on
-    those balls every sensor_dt.
+    those balls every sensor_dt, up to sensor_end (default: t_end, else the last
+    snapshot time).
+
+    Ensembles: a [sweep] may vary a generator table's numeric key, such as
+    "chain.mass.seed" = [1, 2, 3], or ask for replicas = 8 (each random table's seed
+    moved on by 0..7); `chainrun info OUTDIR` gives their statistics, `chainrun plot
+    OUTDIR` their mean and spread, chainrun.open_sweep(OUTDIR) one Dataset.
 
     Sweeps resume: a run whose file already holds the same config is skipped, so
     after an interruption the same command computes only what is missing. A file

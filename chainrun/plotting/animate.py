@@ -49,7 +49,7 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
 
     from chainrun import atomic
     from chainrun.plotting import style
-    from chainrun.plotting.views import UNITS
+    from chainrun.units import PAPER as UNITS
     from chainrun.store import read_run
 
     out = Path(out)

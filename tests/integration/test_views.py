@@ -175,6 +175,7 @@ alpha = 1.5
 [output]
 sensors = [4, 9]
 sensor_dt = 0.05
+sensor_end = 30.0
 """)
     with h5py.File(out / "run.h5") as f:
         mean = f["sensors/mean_force"][()]
