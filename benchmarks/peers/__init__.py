@@ -15,6 +15,11 @@ them is evidence:
   (numba);
 * ``heyoka_peer``: heyoka's Taylor integrator with one on/off parameter and one event
   per contact (optional: ``pip install 'chainrun[bench]'``).
+
+``lammps_peer`` is of another kind: LAMMPS's granular model on a line of real spheres in
+SI units (``SphereLine``), run as a whole ``lmp`` process at a fixed step (optional, in
+the same extra); ``benchmarks.against_lammps`` compares it with chainrun on the same
+lines.
 """
 
 from __future__ import annotations
