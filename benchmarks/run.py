@@ -27,6 +27,10 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 8. previous: this version against a previous one (``--against REV``; by default the
    solver before its latest change), checked out into a temporary git worktree, on
    Hertz N = 10^4 and 10^6 and linear N = 10^5, the two versions' runs alternating.
+9. lammps: chainrun against LAMMPS (optional) on lines of steel spheres, elastic and
+   damped: two-ball checks and restitutions, accuracy against the time step and rtol
+   (N = 20), and whole-process times at N = 2000, 10^4 (elastic) and 3000 (damped)
+   (``benchmarks.against_lammps``).
 
 Examples::
 
@@ -60,7 +64,7 @@ from benchmarks.peers import PeerResult, PeerUnavailable
 
 ROOT = Path(__file__).resolve().parents[1]
 SECTIONS = ("compile", "peers", "scaling", "targets", "k80", "memory", "general",
-            "previous")
+            "previous", "lammps")
 
 #: The accuracy each tool claims for the final velocities (max abs error, paper
 #: units): chainrun's target in issue 6, the scipy and heyoka settings' measured
@@ -121,6 +125,17 @@ class Mode:
     previous_cases: tuple = (("Hertz", 10_000, 1.5), ("Hertz", 1_000_000, 1.5),
                              ("linear", 100_000, 1.0))
     previous_runs: int = 5
+    # lammps (benchmarks.against_lammps): the accuracy line's N, LAMMPS's steps t_c / f,
+    # the N of the mid-wave error's growth, the timed lines (kind, N, target ratio); a
+    # LAMMPS run predicted over lammps_cap seconds is timed on fractions of its steps
+    # (the longer about lammps_fraction_seconds) and extrapolated
+    lammps_accuracy_n: int = 20
+    lammps_fractions: tuple = (20, 50, 100, 200, 400, 1000)
+    lammps_growth_n: tuple = (20, 200, 2000)
+    lammps_cost: tuple = (("elastic", 2000, None), ("elastic", 10_000, 200.0),
+                          ("damped", 3000, 20.0))
+    lammps_cap: float = 120.0
+    lammps_fraction_seconds: float = 20.0
 
     @classmethod
     def make(cls, full: bool, smoke: bool = False) -> "Mode":
@@ -135,7 +150,10 @@ class Mode:
                        general_runs=2, units_n=1000,
                        previous_cases=(("Hertz", 200, 1.5), ("Hertz", 2000, 1.5),
                                        ("linear", 500, 1.0)),
-                       previous_runs=2)
+                       previous_runs=2, lammps_fractions=(20, 100, 400),
+                       lammps_growth_n=(20, 60), lammps_cost=(("elastic", 200, None),
+                                                              ("damped", 60, 20.0)),
+                       lammps_cap=3.0, lammps_fraction_seconds=1.0)
         if not full:
             return cls(full=False)
         return cls(full=True, peers_n=(250, 1000, 4000, 10_000), scipy_max_n=10_000,
@@ -143,7 +161,7 @@ class Mode:
                    hertz_budget=math.inf, linear_budget=math.inf,
                    linear_peer_n=(100, 300, 1000, 3000), peer_point_cap=600.0,
                    k80_timeout=3600.0, k80_process=True, memory_t_end=None,
-                   general_cap=4 * 3600.0)
+                   general_cap=4 * 3600.0, lammps_cap=math.inf)
 
 
 # --- small utilities ---------------------------------------------------------------------
@@ -283,11 +301,11 @@ def versions() -> dict:
     import scipy
 
     import chainrun
-    from benchmarks.peers import heyoka_peer
+    from benchmarks.peers import heyoka_peer, lammps_peer
 
     return {"chainrun": chainrun.__version__, "numpy": np.__version__,
             "scipy": scipy.__version__, "numba": numba.__version__, "h5py": h5py.__version__,
-            "heyoka": heyoka_peer.version()}
+            "heyoka": heyoka_peer.version(), "lammps": lammps_peer.version()}
 
 
 # --- chainrun as a process -----------------------------------------------------------------
@@ -325,11 +343,11 @@ def _toml(value) -> str:
 
 def config_text(name: str, n: int, k: int, alpha: float | None, *,
                 t_end: float | None = None, times=None, chain: dict | None = None,
-                top: dict | None = None) -> str:
+                top: dict | None = None, rtol: float | None = None) -> str:
     """An experiment file of one run: the paper's line of ``n`` balls, ``k`` strikers,
     exponent ``alpha`` (None: left to a material), with the keys of ``chain`` added to
     ``[chain]`` (masses, stiffnesses, materials...) and those of ``top`` (``units``)
-    at the top level."""
+    at the top level; ``t_end`` and ``rtol`` go to ``[solver]``."""
     lines = [f'name = "{name}"']
     lines += [f"{key} = {_toml(v)}" for key, v in (top or {}).items()]
     lines += ["[chain]", f"n = {n}", f"k = {k}"]
@@ -338,8 +356,9 @@ def config_text(name: str, n: int, k: int, alpha: float | None, *,
     lines += [f"{key} = {_toml(v)}" for key, v in (chain or {}).items()]
     if times is not None:
         lines += ["[output]", "times = [" + ", ".join(repr(float(t)) for t in times) + "]"]
-    if t_end is not None:
-        lines += ["[solver]", f"t_end = {float(t_end)!r}"]
+    solver = {key: float(v) for key, v in (("t_end", t_end), ("rtol", rtol)) if v is not None}
+    if solver:
+        lines += ["[solver]"] + [f"{key} = {v!r}" for key, v in solver.items()]
     return "\n".join(lines) + "\n"
 
 
@@ -1250,6 +1269,11 @@ def report(res: dict) -> str:
     if res.get("previous"):
         out.append("")
         out.extend(report_previous(res["previous"]))
+    if res.get("lammps"):
+        from benchmarks import against_lammps
+
+        out.append("")
+        out.extend(against_lammps.report(res["lammps"]))
     if res["notes"]:
         out.append("")
         out.extend(f"Note: {n}" for n in res["notes"])
@@ -1326,6 +1350,10 @@ def main(argv=None) -> int:
             res["general"] = section_general(mode, procs)
         if "previous" in args.only:
             res["previous"] = section_previous(mode, procs, args.against)
+        if "lammps" in args.only:
+            from benchmarks import against_lammps
+
+            res["lammps"] = against_lammps.section(mode, procs, res["notes"])
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     res["load_end"] = os.getloadavg()
