@@ -49,6 +49,9 @@ REFERENCE_RTOL = 1e-14
 TARGET_ERROR = 1e-3
 #: The step (t_c / f) at which the mid-wave error is measured against N.
 GROWTH_FRACTION = 100
+#: The largest N whose error at the end is measured at that step too (to the terminal
+#: time: a damped line's is long).
+GROWTH_WHOLE_N = 200
 #: The small step of the two-ball checks, t_c / f.
 TWO_BALL_FRACTION = 10_000
 
@@ -212,16 +215,24 @@ def accuracy(kind: str, n: int, fractions, growth_n) -> dict:
     out["order"] = None if slope is None else -slope
     out["growth"] = []
     for m in growth_n:
+        # mid-wave; to the end too while that is cheap (N <= GROWTH_WHOLE_N)
         g_line, g_spheres, _, _ = lines(kind, m)
         g_mid = _terminal_time(lines("elastic", m)[0]) / 2
-        dt = t_c / GROWTH_FRACTION
-        steps = max(1, round(g_mid / dt))
-        r = lp.run(g_spheres, dt, (steps,))
-        ref = _chainrun_at(g_line, [steps * dt])
-        out["growth"].append({"n": m, "t_mid": steps * dt, "steps": steps,
-                              "mid": float(np.max(np.abs(r.velocities[steps] - ref[0])))})
-        log(f"  {kind}, LAMMPS dt = t_c/{GROWTH_FRACTION}, N = {m}: mid-wave error "
-            f"{fmt_e(out['growth'][-1]['mid'])} m/s")
+        g_end = _terminal_time(g_line) if m <= GROWTH_WHOLE_N else None
+        if g_end is None:
+            dt = t_c / GROWTH_FRACTION
+            n_mid = max(1, round(g_mid / dt))
+            marks, times = (n_mid,), [n_mid * dt]
+        else:
+            dt, n_mid, n_end = grid(g_end, g_mid, t_c, GROWTH_FRACTION)
+            marks, times = (n_mid, n_end), [n_mid * dt, g_end]
+        r = lp.run(g_spheres, dt, marks)
+        ref = _chainrun_at(g_line, times)
+        errors = [float(np.max(np.abs(r.velocities[k] - v))) for k, v in zip(marks, ref)]
+        out["growth"].append({"n": m, "t_mid": n_mid * dt, "mid": errors[0],
+                              "end": errors[1] if len(errors) > 1 else None})
+        log(f"  {kind}, LAMMPS dt = t_c/{GROWTH_FRACTION}, N = {m}: errors "
+            f"{fmt_e(errors[0])} mid-wave, {fmt_e(out['growth'][-1]['end'])} at the end (m/s)")
     last = out["growth"][-2:]
     out["growth_exponent"] = _slope([g["n"] for g in last], [g["mid"] for g in last])
     return out
@@ -233,18 +244,20 @@ def step_for(acc: dict, n: int) -> dict:
 
     Its mid-wave error at t_c / GROWTH_FRACTION is the measured one at the nearest
     measured N, times (N / that N)^q (q from the two largest measured N; at least 0);
-    its error at the end is the N = 20 line's at that step (it does not grow with N: the
-    balls leave the line at the same speeds). The larger of the two scales with the
-    step to the order measured at N = 20.
+    its error at the end the largest measured at that step (N = 20 and the growth
+    series' N <= GROWTH_WHOLE_N: it does not grow with N on the elastic line, whose
+    balls leave at the same speeds). The larger of the two scales with the step to the
+    order measured at N = 20.
     """
     g = min(acc["growth"], key=lambda p: abs(math.log(n / p["n"])))
     q = max(acc["growth_exponent"] or 0.0, 0.0)
     mid = g["mid"] * (n / g["n"]) ** q
     at = next(r for r in acc["lammps"] if r["fraction"] == GROWTH_FRACTION)
-    worst = max(mid, at["end"]) / acc["impact_speed"]
+    end = max([at["end"]] + [p["end"] for p in acc["growth"] if p.get("end") is not None])
+    worst = max(mid, end) / acc["impact_speed"]
     order = acc["order"] or 1.0
     f = GROWTH_FRACTION * (worst / TARGET_ERROR) ** (1.0 / order)
-    return {"fraction": f, "predicted_mid": mid, "predicted_end": at["end"],
+    return {"fraction": f, "predicted_mid": mid, "predicted_end": end,
             "from_n": g["n"], "growth_exponent": q, "order": order}
 
 
@@ -429,10 +442,12 @@ def report(res: dict) -> list[str]:
                     row.append(fmt_t(None if x is None else x["time"]))
             rows.append(row)
         out.append("    " + table(heads, rows).replace("\n", "\n    "))
-        growth = ", ".join(f"N = {g['n']} {fmt_e(g['mid'])}" for g in acc["growth"])
-        out.append(f"    LAMMPS's order in dt {acc['order']:.2f}; its mid-wave error at "
-                   f"dt = t_c/{GROWTH_FRACTION} against N: {growth} m/s (the last two: "
-                   f"~N^{acc['growth_exponent']:.2f})")
+        growth = ", ".join(f"N = {g['n']} {fmt_e(g['mid'])}"
+                           + (f" / {fmt_e(g['end'])}" if g.get("end") is not None else "")
+                           for g in acc["growth"])
+        out.append(f"    LAMMPS's order in dt {acc['order']:.2f}; its error at "
+                   f"dt = t_c/{GROWTH_FRACTION} against N, mid-wave / at the end: {growth} m/s "
+                   f"(mid-wave, the last two: ~N^{acc['growth_exponent']:.2f})")
     out.append("")
     out.append(f"  Timed lines, to chainrun's terminal time, whole processes; LAMMPS at the step "
                f"where its largest error on that line is {TARGET_ERROR:g} of the impact speed "
@@ -455,9 +470,10 @@ def report(res: dict) -> list[str]:
                      str(lam["steps"]),
                      fmt_t(lam["time"]), how, errors, fmt_t(default["time"]),
                      f"{c['ratio']:.3g}", verdict])
-        notes.append(f"{label}: step from a predicted mid-wave error of "
-                     f"{fmt_e(st['predicted_mid'])} m/s at t_c/{GROWTH_FRACTION} (measured at "
-                     f"N = {st['from_n']}, x (N/{st['from_n']})^{st['growth_exponent']:.2f}), "
+        notes.append(f"{label}: step from predicted errors of {fmt_e(st['predicted_mid'])} "
+                     f"m/s mid-wave (measured at N = {st['from_n']}, x (N/{st['from_n']})^"
+                     f"{st['growth_exponent']:.2f}) and {fmt_e(st['predicted_end'])} m/s at "
+                     f"the end at t_c/{GROWTH_FRACTION}, "
                      f"order {st['order']:.2f}; chainrun times {', '.join(fmt_t(w) for w in default['walls'])} s")
     out.append("    " + table(["line N", "t_end ms", "LAMMPS dt", "steps", "LAMMPS s", "how",
                                "its error mid / end m/s", "chainrun s", "LAMMPS/chainrun",
