@@ -462,7 +462,8 @@ def report(res: dict) -> list[str]:
         lam, st = c["lammps"], c["step"]
         default = next(r for r in c["chainrun"] if r["rtol"] == RTOLS[-1])
         how = "measured" if lam["measured"] else (
-            f"extrapolated from {lam['fraction_steps'][0]} and {lam['fraction_steps'][1]} steps")
+            f"extrapolated from {lam['fraction_steps'][0]} and {lam['fraction_steps'][1]} "
+            f"steps ({100 * lam['fraction_steps'][1] / lam['steps']:.2g}%)")
         errors = ("-" if "mid" not in lam else f"{fmt_e(lam['mid'])} / {fmt_e(lam['end'])}")
         verdict = "" if c["target"] is None else (
             f"{'MET' if c['met'] else 'NOT MET'} (>= {c['target']:g}x)")
