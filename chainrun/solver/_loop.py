@@ -41,7 +41,7 @@ from chainrun.solver._state import (
     F_TOUT, F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL,
     I_FORCED, I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS,
     I_POST, I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SEALED, SERIES_CLUSTERS,
-    ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
+    ST_DEFECT, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
     ST_TERMINAL, ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at,
     _tw,
 )
@@ -449,8 +449,9 @@ def advance(S):
 
     The driver sets ``fs[F_TOUT]`` and ``ints[I_HAVEOUT] = 1`` to ask for the next
     snapshot (2 for a sample of a few balls, which it then asks for as a task),
-    empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW and calls
-    again. With ``ints[I_TASK]`` set, the call evaluates the state at ``fs[F_TTASK]``
+    empties the event log on ST_FLUSH, grows the compact arrays on ST_GROW (to
+    ``ints[I_NEED]``) and calls again; ST_DEFECT reports contact states that do not
+    settle. With ``ints[I_TASK]`` set, the call evaluates the state at ``fs[F_TTASK]``
     instead (TASK_SNAPSHOT: every ball into ox, ov; TASK_SAMPLE: the balls of probe)
     and returns ST_OUTPUT.
     """
@@ -482,7 +483,7 @@ def advance(S):
                 return ST_FLUSH
             S.ints[I_POST] = 0
             if not _post_step(S):
-                return ST_GROW
+                return ST_DEFECT
             continue
         if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
             _unseal_at_end(S)
@@ -501,8 +502,7 @@ def advance(S):
                 if t == S.fs[F_TSAME]:
                     S.ints[I_NSAME] += 1
                     if S.ints[I_NSAME] > 4 * S.cst.shape[0] + 64:
-                        S.ints[I_NEED] = 0
-                        return ST_GROW
+                        return ST_DEFECT
                 else:
                     S.fs[F_TSAME] = t
                     S.ints[I_NSAME] = 0

@@ -74,6 +74,9 @@ ST_FLUSH = 5
 ST_EVENT_LIMIT = 6
 ST_NON_FINITE = 7
 ST_STEP_UNDERFLOW = 8
+# contact states that do not settle (a defect of the solver, not of the line): the
+# driver reports it; ST_GROW always carries the capacity needed in ints[I_NEED]
+ST_DEFECT = 9
 
 # ---- contact states -------------------------------------------------------------------
 DORMANT = 3

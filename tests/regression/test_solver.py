@@ -616,3 +616,23 @@ def test_the_kernels_event_codes_are_the_public_event_kinds():
     kernel_codes = {name[3:]: getattr(_state, name) for name in dir(_state)
                     if name.startswith("EV_")}
     assert kernel_codes == {kind.name: kind.value for kind in EventKind}
+
+
+def test_a_contact_defect_is_its_own_status_not_another_growth():
+    """A contact event that cannot be applied after a step is a defect of the solver,
+    reported as ST_DEFECT. It was reported as ST_GROW with whatever capacity an earlier
+    growth of the window had left in ints[I_NEED]: the driver then grew the window
+    again and went on, the event dropped without a word."""
+    from chainrun.solver import _driver as D
+    from chainrun.solver import _loop, _state
+
+    S = D._new_state(6, 1, 1.5, 1e-12, 10.0, None)
+    S.ints[_state.I_NEED] = 3  # what a real growth of the window leaves behind
+    # no room for a cluster: the closing below cannot be applied
+    S = S._replace(clo=S.clo[:0].copy())
+    S.ints[_state.I_NCL] = 0
+    S.ints[_state.I_POST] = 1
+    S.ints[_state.I_EVK] = _state.EV_CLOSE
+    S.ints[_state.I_EVJ] = 2
+    assert _loop.advance(S) == _state.ST_DEFECT
+    assert _state.ST_DEFECT not in (_state.ST_GROW, *D._OUTCOMES)
