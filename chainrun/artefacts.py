@@ -280,7 +280,7 @@ def make_rules(results: str = "results", configs: str = "configs") -> str:
         if a.kind == "comparison":   # its catalogue quotes every recipe's values
             needs.append("$(wildcard chainrun/analysis/*.py)")
         elif a in GALLERY:           # the gallery's measurements and theory
-            needs.append("chainrun/analysis/gallery_measure.py")
+            needs += ["chainrun/analysis/gallery_measure.py", "chainrun/analysis/pulse.py"]
         lines.append(f"{analysis_path(a.name, results)}: {' '.join(needs)}")
     lines.append("")
     for a in ALL:

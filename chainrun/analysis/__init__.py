@@ -9,6 +9,7 @@ recipe and writes ``results/analysis/<name>.h5``.
 Modules:
 
 - ``derived``: measurements on runs (rebound and ejection, fits, solitary-wave trains);
+- ``pulse``: force sensors' pulses (peak, width, arrival) and a wave's fitted speed;
 - ``similarity``: equation (4.9) by shooting and by Airy functions;
 - ``nesterenko``: Nesterenko's long-wave solitary wave;
 - ``linear``, ``hertz``: one recipe per artefact, for alpha = 1 and alpha = 3/2;

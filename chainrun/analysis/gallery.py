@@ -3,7 +3,8 @@
 This module owns what each gallery item derives from its runs: the arrays its figure
 draws (as series of the analysis file, with the panel they belong to in ``panel``) and
 the named values the gallery's comparison (``chainrun.analysis.gallery_comparison``)
-quotes. The measurements themselves are in ``chainrun.analysis.gallery_measure``.
+quotes. The measurements themselves are in ``chainrun.analysis.gallery_measure`` and, for
+pulses, ``chainrun.analysis.pulse``.
 
 Items: ``solitary`` (Coste et al. 1997; Nesterenko's laws), ``cradle`` (Newton's cradle
 in SI, elastic and damped), ``wall`` (Falcon et al. 1998; N = 2K on a wall; elastic and
@@ -17,6 +18,7 @@ import numpy as np
 
 from chainrun.analysis import Inputs, Result
 from chainrun.analysis import gallery_measure as gm
+from chainrun.analysis.pulse import first_pulse, wave_speed
 from chainrun.materials import material
 
 __all__ = ["cradle", "dimer", "head_on", "solitary", "taper", "wall"]
@@ -29,9 +31,11 @@ def _swept(run, key: str):
 def _first_pulses(run, side: int = 1, baseline: float | None = None):
     """Peak time and force of the first pulse at each sensor (its contact on ``side``:
     0 towards ball 1, 1 away from it)."""
-    out = [gm.first_pulse(run.sensor_time, run.sensor_force[:, s, side], baseline)
+    out = [first_pulse(run.sensor_time, run.sensor_force[:, s, side], baseline)
            for s in range(run.sensor_balls.size)]
-    return np.array([o[0] for o in out]), np.array([o[1] for o in out])
+    if any(np.isnan(o.peak) for o in out):
+        raise ValueError(f"{run.path}: a sensor without a whole pulse")
+    return np.array([o.peak_time for o in out]), np.array([o.peak for o in out])
 
 
 def _bead(run, name: str):
@@ -54,11 +58,11 @@ def solitary(inputs: Inputs) -> Result:
     run = inputs.run("gallery/solitary-prefactor")
     balls = run.sensor_balls
     t, f = _first_pulses(run)
-    c = gm.wave_speed(balls, t)
+    c = wave_speed(balls, t).value
     F = float(np.mean(f))
     half = balls.size // 2 + 1
-    c_a, c_b = gm.wave_speed(balls[:half], t[:half]), gm.wave_speed(balls[half - 1:],
-                                                                     t[half - 1:])
+    c_a = wave_speed(balls[:half], t[:half]).value
+    c_b = wave_speed(balls[half - 1:], t[half - 1:]).value
     ratio = c / F ** (1.0 / 6.0)
     r.value("c", c, "speed of the settled solitary wave, balls per unit time (paper units)")
     r.value("F", F, "its peak contact force (paper units), mean over the sensors")
@@ -87,7 +91,7 @@ def solitary(inputs: Inputs) -> Result:
     for run in inputs.runs("gallery/solitary-steel"):
         mat, d = _bead(run, "chrome_steel")
         t, f = _first_pulses(run)
-        V = gm.wave_speed(run.sensor_balls, t) * d
+        V = wave_speed(run.sensor_balls, t).value * d
         Fm = float(np.mean(f))
         group = float(gm.daraio_group(Fm, mat.young, mat.poisson, mat.density, d))
         F_si.append(Fm)
@@ -120,7 +124,7 @@ def solitary(inputs: Inputs) -> Result:
         mat, d = _bead(run, "chrome_steel")
         F0 = float(_swept(run, "chain.precompression"))
         t, f = _first_pulses(run, baseline=F0)
-        V = gm.wave_speed(run.sensor_balls, t) * d
+        V = wave_speed(run.sensor_balls, t).value * d
         Fm = float(np.mean(f))
         c0 = gm.long_wave_sound_prefactor() * float(
             gm.daraio_group(F0, mat.young, mat.poisson, mat.density, d))

@@ -1,18 +1,17 @@
 """Measurements and closed forms for the gallery (``make gallery``, ``docs/gallery/``).
 
 This module owns the definitions the gallery's recipes (``chainrun.analysis.gallery``)
-use, as pure functions of arrays: the first pulse in a force trace, a wave's speed,
-Nesterenko's long-wave laws in SI units (with and without precompression) and the
-constants that turn the paper's units into them, the effective restitution of a line
-against a wall and how long the wall holds it, the energy on each side of a ball, the drift
-of free balls, the elastic collision of two balls and Hertz's contact time.
+use, as pure functions of arrays: Nesterenko's long-wave laws in SI units (with and
+without precompression) and the constants that turn the paper's units into them, the
+effective restitution of a line against a wall and how long the wall holds it, the
+energy on each side of a ball, the drift of free balls, the elastic collision of two
+balls and Hertz's contact time. Pulses (a peak force, its time, a wave's speed) are
+measured by ``chainrun.analysis.pulse``.
 
 Conventions:
 
 - a *contact force* is that of one contact (between two beads, or a bead and a wall);
   the *peak force* ``F_m`` of a wave is the largest contact force as it passes;
-- a wave's *speed* is the slope of the ball number against the time of its force peak
-  (balls per unit time; times the diameter for m/s);
 - the *effective restitution* of a line against a wall is the ratio of its centre-of-mass
   velocity after and before, ``-sum(m v_final) / sum(m v_initial)``;
 - a *wall contact* lasts from the first touch (t = 0) to the instant the wall's force
@@ -43,16 +42,13 @@ __all__ = [
     "daraio_group",
     "drift",
     "energy_split",
-    "first_pulse",
     "hertz_contact_time_factor",
     "long_wave_prefactor",
     "long_wave_sound_prefactor",
     "nesterenko_precompressed_ratio",
-    "parabola_peak",
     "restitution",
     "two_ball",
     "wall_contact",
-    "wave_speed",
 ]
 
 #: ``(6/pi)^(1/2) 3^(-1/3) 4^(-1/6)``: a speed ``C F^(1/6)`` in balls per unit time of the
@@ -104,56 +100,6 @@ def nesterenko_precompressed_ratio(f_r):
     f = np.asarray(f_r, dtype=float)
     return np.sqrt(4.0 / 15.0 * (3.0 + 2.0 * f ** (5.0 / 3.0) - 5.0 * f ** (2.0 / 3.0))) \
         / (f ** (2.0 / 3.0) - 1.0)
-
-
-def parabola_peak(t, y, i: int) -> tuple[float, float]:
-    """The vertex of the parabola through samples ``i - 1, i, i + 1`` of equally spaced
-    ``(t, y)``: ``(t_peak, y_peak)``."""
-    y0, y1, y2 = float(y[i - 1]), float(y[i]), float(y[i + 1])
-    h = float(t[i + 1] - t[i])
-    denom = y0 - 2.0 * y1 + y2
-    if denom == 0.0:
-        return float(t[i]), y1
-    s = 0.5 * (y0 - y2) / denom
-    return float(t[i]) + s * h, y1 - 0.25 * (y0 - y2) * s
-
-
-def first_pulse(t, f, baseline: float | None = None) -> tuple[float, float]:
-    """Time and value of the peak of the first pulse of a force trace.
-
-    The first pulse is the first stretch where ``f`` is above half-way between its
-    baseline (``f[0]`` unless given: the static force of a precompressed chain) and its
-    largest value; its peak is refined by a parabola.
-
-    Parameters
-    ----------
-    t, f : ndarray, shape (T,)
-        Equally spaced sample times and the force at each.
-
-    Returns
-    -------
-    (float, float)
-        ``(t_peak, f_peak)``.
-    """
-    t = np.asarray(t, dtype=float)
-    f = np.asarray(f, dtype=float)
-    base = float(f[0]) if baseline is None else float(baseline)
-    level = base + 0.5 * (float(f.max()) - base)
-    above = np.flatnonzero(f > level)
-    if above.size == 0:
-        raise ValueError("no pulse in the trace")
-    start = int(above[0])
-    below = np.flatnonzero(f[start:] <= level)
-    stop = start + (int(below[0]) if below.size else f.size - start)
-    i = start + int(np.argmax(f[start:stop]))
-    if i == 0 or i == f.size - 1:
-        return float(t[i]), float(f[i])
-    return parabola_peak(t, f, i)
-
-
-def wave_speed(balls, times) -> float:
-    """Least-squares slope of ball number against the time the wave passes it."""
-    return float(np.polyfit(np.asarray(times, float), np.asarray(balls, float), 1)[0])
 
 
 def restitution(mass, v_initial, v_final) -> float:

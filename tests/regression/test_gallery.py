@@ -54,6 +54,7 @@ def test_make_rules_list_the_gallery_apart():
     line = next(l for l in rules if l.startswith("R/analysis/gallery-dimer.h5:"))
     assert "R/runs/gallery/dimer-0.35/index.h5" in line
     assert "chainrun/analysis/gallery_measure.py" in line
+    assert "chainrun/analysis/pulse.py" in line
 
 
 # ------------------------------------------------------------- closed forms and limits
@@ -90,15 +91,7 @@ def test_hertz_contact_time_factor_by_the_beta_function():
                                                            rel=1e-12)
 
 
-def test_first_pulse_finds_the_first_of_two_peaks():
-    t = np.arange(0.0, 10.0, 0.01)
-    f = 2.0 + 3.0 * np.exp(-((t - 2.345) / 0.3) ** 2) + 5.0 * np.exp(-((t - 7.0) / 0.3) ** 2)
-    tp, fp = gm.first_pulse(t, f, baseline=2.0)
-    assert tp == pytest.approx(2.345, abs=1e-4) and fp == pytest.approx(5.0, abs=1e-3)
-
-
-def test_wave_speed_restitution_energy_split_drift():
-    assert gm.wave_speed([10, 20, 30], [1.0, 2.0, 3.0]) == pytest.approx(10.0)
+def test_restitution_energy_split_drift():
     assert gm.restitution([1, 2], [1, 1], [-1, -0.25]) == pytest.approx(0.5)
     assert gm.energy_split([1, 2, 1], [1, 1, 2], 2) == (0.5, 1.0, 2.0)
     np.testing.assert_allclose(gm.drift([0.0, 1.0], [1.0, -2.0], 0.5, 1.5), [1.0, -1.0])

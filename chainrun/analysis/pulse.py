@@ -1,0 +1,355 @@
+"""Pulse measurements: the first pulse a force sensor records, and the wave's speed.
+
+This module owns what a pulse is and how it is measured, for any run with force
+sensors (``output.sensors``) and for any force trace on a uniform time grid: the peak of
+the first pulse, the time of that peak, its full width at half maximum, its arrival
+time, and the speed of a wave fitted through several sensors' peak times.
+``measure_pulses`` applies them to a run; ``first_pulse``, ``parabola_peak`` and
+``wave_speed`` are the pieces (the gallery's recipes use them too).
+
+Definitions (every quantity in the run's own units):
+
+- the *baseline* of a trace is its first sample (0 for a contact at rest, the static
+  force F0 of a precompressed chain), and its *rise* the force above it;
+- the *first pulse* of a trace is the first stretch of samples whose rise exceeds half
+  the trace's largest rise, and its *peak* the largest sample of that stretch, refined by
+  the parabola through that sample and its two neighbours. A later pulse (a reflected
+  wave, a second solitary wave) is not measured, unless it is more than twice as high as
+  the first (``detect`` sets that fraction);
+- the *peak force* is the refined largest value, baseline included, and the *peak time*
+  its time;
+- the *width* (FWHM) is the time between the crossings of half-way between the baseline
+  and the peak, on the rising edge and on the falling edge, each interpolated linearly
+  between the two samples about it;
+- the *arrival time* is the time the rising edge crosses a fraction ``arrival`` (0.1 by
+  default) of the way from the baseline to the peak, interpolated likewise;
+- a trace whose rise never exceeds ``min_rise`` has no pulse, and a pulse cut off by the
+  ends of the samples (its peak at the first or last sample, or a crossing outside them)
+  leaves the numbers it cannot give as NaN: a sensor the wave never reaches, or reaches
+  as the run ends, gives NaN, not an error;
+- a wave's *speed* is the least-squares slope of the positions of the contacts measured
+  against their peak times, with its standard uncertainty from the fit's residuals.
+
+A sensor ball has two contacts, side 0 towards ball 1 and side 1 away from it. The
+wave arrives through one and leaves through the other; the *sensor's pulse* is that of
+the contact it leaves through: of the sides whose trace has a pulse, the one whose pulse
+starts later (side 1 if they tie). A solitary wave presses both contacts alike, each to
+its largest contact force between two beads (0.63955 in the paper's units for the wave
+of one striker; the paper prints 0.640). The sensor's *mean force*, the mean of its two contact forces, is what
+a piezo sensor embedded in the bead measures; its peak is lower, the two contacts
+peaking at different times.
+
+References
+----------
+.. [1] E. J. Hinch and S. Saint-Jean, "The fragmentation of a line of balls by an
+   impact", Proc. R. Soc. Lond. A 455, 3201-3220 (1999), section 5a: the solitary wave
+   of one striker, its speed 0.841 and peak force 0.640.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from chainrun.errors import ChainrunError
+from chainrun.store import RunData, read_run
+
+__all__ = ["Pulse", "Pulses", "WaveSpeed", "first_pulse", "measure_pulses", "parabola_peak",
+           "wave_speed"]
+
+_NAN = math.nan
+
+
+@dataclass(frozen=True)
+class Pulse:
+    """The first pulse of one force trace (NaN where it cannot be measured).
+
+    Attributes
+    ----------
+    peak : float
+        Its largest force, baseline included.
+    peak_time : float
+    width : float
+        Full width at half maximum (half-way between the baseline and the peak).
+    arrival_time : float
+        When its rising edge crosses the ``arrival`` fraction from baseline to peak.
+    onset : float
+        The time of the pulse's first sample (the first whose rise exceeds ``detect`` of
+        the largest): known even for a pulse cut off before its peak; NaN without one.
+    """
+
+    peak: float
+    peak_time: float
+    width: float
+    arrival_time: float
+    onset: float
+
+
+_NO_PULSE = Pulse(_NAN, _NAN, _NAN, _NAN, _NAN)
+
+
+@dataclass(frozen=True)
+class WaveSpeed:
+    """A wave's speed fitted through ``points`` (position, time) pairs.
+
+    Attributes
+    ----------
+    value : float
+        The least-squares slope of position against time (NaN with fewer than two
+        points); positive for a wave travelling towards ball N.
+    error : float
+        Its standard uncertainty, ``sqrt(sum(r^2) / (points - 2) / sum((t - mean t)^2))``
+        from the residuals r of the positions; NaN with two points, through which the
+        line passes exactly, leaving no residual to estimate it from.
+    points : int
+    """
+
+    value: float
+    error: float
+    points: int
+
+
+@dataclass(frozen=True)
+class Pulses:
+    """The first pulse at each force sensor of a run, and the wave's speed.
+
+    Every value is in the run's units (``units``: the paper's, or SI: N, s, m/s).
+
+    Attributes
+    ----------
+    units : str
+        ``"paper"`` or ``"si"``.
+    balls : ndarray of int, shape (S,)
+        The sensor balls (1..N).
+    side : ndarray of int, shape (S,)
+        The contact each sensor's pulse was measured on, the one the wave leaves
+        through: 0 towards ball 1, 1 away from it.
+    peak_force, peak_time, width, arrival_time : ndarray, shape (S,)
+        That contact's first pulse (see ``Pulse``).
+    peak_mean_force : ndarray, shape (S,)
+        The peak of the first pulse of the sensor's mean force (the mean of its two
+        contact forces: what a sensor embedded in the ball measures).
+    speed : WaveSpeed
+        Balls per unit time: the fit of the measured contacts' positions, in balls
+        (the contact of balls b and b + 1 at b + 1/2), against their peak times.
+    speed_si : WaveSpeed or None
+        m/s, for a run of spheres with diameters: the same fit with the positions in
+        metres, from the centre-to-centre distances (the radii plus the gaps); a
+        contact sits in the middle of its gap. None otherwise.
+    arrival : float
+        The fraction of the rise that defines the arrival time.
+    """
+
+    units: str
+    balls: np.ndarray
+    side: np.ndarray
+    peak_force: np.ndarray
+    peak_time: np.ndarray
+    width: np.ndarray
+    arrival_time: np.ndarray
+    peak_mean_force: np.ndarray
+    speed: WaveSpeed
+    speed_si: WaveSpeed | None
+    arrival: float
+
+
+def parabola_peak(t, y, i: int) -> tuple[float, float]:
+    """The vertex of the parabola through samples ``i - 1, i, i + 1`` of equally spaced
+    ``(t, y)``: ``(t_peak, y_peak)``."""
+    y0, y1, y2 = float(y[i - 1]), float(y[i]), float(y[i + 1])
+    h = float(t[i + 1] - t[i])
+    denom = y0 - 2.0 * y1 + y2
+    if denom == 0.0:
+        return float(t[i]), y1
+    s = 0.5 * (y0 - y2) / denom
+    return float(t[i]) + s * h, y1 - 0.25 * (y0 - y2) * s
+
+
+def _crossing(t: np.ndarray, f: np.ndarray, level: float, i: int, back: bool) -> float:
+    """Where ``f`` first falls to ``level`` going from sample ``i`` backwards (``back``)
+    or forwards, interpolated linearly; NaN if it does not within the samples."""
+    if back:
+        below = np.flatnonzero(f[:i] <= level)
+        if not below.size:
+            return _NAN
+        a = int(below[-1])
+        b = a + 1
+    else:
+        below = np.flatnonzero(f[i + 1:] <= level)
+        if not below.size:
+            return _NAN
+        b = i + 1 + int(below[0])
+        a = b - 1
+    return float(t[a] + (level - f[a]) / (f[b] - f[a]) * (t[b] - t[a]))
+
+
+def first_pulse(t, f, baseline: float | None = None, *, arrival: float = 0.1,
+                detect: float = 0.5, min_rise: float = 0.0) -> Pulse:
+    """The first pulse of a force trace: its peak, peak time, width and arrival time.
+
+    See the module's docstring for the definitions.
+
+    Parameters
+    ----------
+    t, f : ndarray, shape (M,)
+        Equally spaced sample times and the force at each.
+    baseline : float, optional
+        The force without the pulse; ``f[0]`` unless given.
+    arrival : float
+        The fraction of the way from the baseline to the peak that defines the arrival.
+    detect : float
+        A pulse is a stretch whose rise exceeds this fraction of the largest rise.
+    min_rise : float
+        A trace whose largest rise does not exceed this has no pulse.
+
+    Returns
+    -------
+    Pulse
+        All NaN without a pulse; NaN where the pulse is cut off by the ends of ``t``.
+    """
+    t = np.asarray(t, dtype=float)
+    f = np.asarray(f, dtype=float)
+    if f.size < 3:
+        return _NO_PULSE
+    base = float(f[0]) if baseline is None else float(baseline)
+    top = float(f.max())
+    if not top - base > min_rise:
+        return _NO_PULSE
+    level = base + detect * (top - base)
+    start = int(np.flatnonzero(f > level)[0])
+    below = np.flatnonzero(f[start:] <= level)
+    stop = start + (int(below[0]) if below.size else f.size - start)
+    i = start + int(np.argmax(f[start:stop]))
+    onset = float(t[start])
+    if i == 0 or i == f.size - 1:   # the peak is not within the samples
+        return Pulse(_NAN, _NAN, _NAN, _NAN, onset)
+    t_peak, peak = parabola_peak(t, f, i)
+    half = base + 0.5 * (peak - base)
+    width = _crossing(t, f, half, i, back=False) - _crossing(t, f, half, i, back=True)
+    return Pulse(peak, t_peak, width,
+                 _crossing(t, f, base + arrival * (peak - base), i, back=True), onset)
+
+
+def wave_speed(positions, times) -> WaveSpeed:
+    """Least-squares slope of ``positions`` against ``times``, with its uncertainty.
+
+    Parameters
+    ----------
+    positions, times : ndarray, shape (P,)
+        Where and when the wave passed; pairs with a NaN are left out.
+
+    Returns
+    -------
+    WaveSpeed
+    """
+    x = np.asarray(positions, dtype=float)
+    t = np.asarray(times, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(t)
+    x, t = x[ok], t[ok]
+    if x.size < 2 or np.ptp(t) == 0.0:
+        return WaveSpeed(_NAN, _NAN, int(x.size))
+    if x.size == 2:
+        return WaveSpeed(float(np.polyfit(t, x, 1)[0]), _NAN, 2)
+    # cov=True scales the covariance by the residuals' sum of squares over (P - 2)
+    p, cov = np.polyfit(t, x, 1, cov=True)
+    return WaveSpeed(float(p[0]), float(math.sqrt(cov[0, 0])), int(x.size))
+
+
+def _contact_places(run: RunData) -> tuple[np.ndarray, np.ndarray | None]:
+    """Where each contact of the line is, in balls and (for spheres) in metres.
+
+    Returns ``(balls, metres)``, each of shape (N + 1,): entry j is the contact between
+    balls j and j + 1 (1-based; 0 and N are the walls' places, or where they would be).
+    In balls it is j + 1/2; in metres ball 1's centre is 0, centres are the radii plus
+    the gap apart, and a contact sits in the middle of its gap.
+    """
+    n = run.n
+    in_balls = np.arange(n + 1) + 0.5
+    model = run.model
+    if model is None or model.get("diameter") is None:
+        return in_balls, None
+    r = 0.5 * np.asarray(model["diameter"], dtype=float)
+    walls = model.get("walls") or {}
+    gap = np.concatenate([[walls.get("left", {}).get("gap", 0.0)],
+                          np.asarray(model["gap"], dtype=float),
+                          [walls.get("right", {}).get("gap", 0.0)]])
+    centre = np.concatenate([[0.0], np.cumsum(r[:-1] + r[1:] + gap[1:-1])])
+    # contact j is half its gap left of ball j + 1's left surface; the right wall's,
+    # half its gap right of ball N's right surface
+    in_metres = np.concatenate([centre - r - 0.5 * gap[:-1],
+                                [centre[-1] + r[-1] + 0.5 * gap[-1]]])
+    return in_balls, in_metres
+
+
+def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) -> Pulses:
+    """Measure the first pulse at each force sensor of a run, and the wave's speed.
+
+    Per sensor ball: the peak contact force, its time, the width (FWHM) and the
+    arrival time of the first pulse of the contact the wave leaves the ball through,
+    and the peak of the ball's mean force; with two or more sensors the wave's speed,
+    fitted through those contacts' peak times (the module's docstring defines each).
+
+    Parameters
+    ----------
+    run : chainrun.store.RunData or path
+        A run with force sensors, or its run file.
+    arrival : float
+        The arrival time is when a pulse's rising edge crosses this fraction of the way
+        from the baseline to the peak, in (0, 1).
+    min_rise : float, optional
+        Traces that never rise more than this above their first sample have no pulse
+        (NaN); default 1e-9 of the line's force scale (``model["scales"]["force"]``,
+        1 in the paper's units), well above the forces ahead of a wave's front.
+
+    Returns
+    -------
+    Pulses
+
+    Raises
+    ------
+    ChainrunError
+        For a run without force sensors, or an ``arrival`` outside (0, 1).
+    """
+    if not isinstance(run, RunData):
+        run = read_run(run)
+    if not 0.0 < arrival < 1.0:
+        raise ChainrunError(f"arrival: must be within (0, 1), got {arrival!r}")
+    balls = np.asarray(run.sensor_balls, dtype=np.int64)
+    if not balls.size:
+        raise ChainrunError(f"{run.path}: no force sensors in this run; give "
+                            "output.sensors and output.sensor_dt to record them")
+    if min_rise is None:
+        scales = (run.model or {}).get("scales") or {}
+        min_rise = 1e-9 * float(scales.get("force", 1.0))
+    t, force = run.sensor_time, np.asarray(run.sensor_force, dtype=float)
+
+    def measure(trace) -> Pulse:
+        return first_pulse(t, trace, arrival=arrival, min_rise=min_rise)
+
+    sides = [[measure(force[:, s, side]) for side in (0, 1)] for s in range(balls.size)]
+    side = np.array([_leaving_side(pair) for pair in sides], dtype=np.int64)
+    chosen = [pair[k] for pair, k in zip(sides, side)]
+    mean = [measure(force[:, s, :].mean(axis=1)) for s in range(balls.size)]
+
+    peak_time = np.array([p.peak_time for p in chosen])
+    in_balls, in_metres = _contact_places(run)
+    where = balls - 1 + side   # index of each measured contact in the places
+    return Pulses(
+        units=run.units, balls=balls, side=side,
+        peak_force=np.array([p.peak for p in chosen]), peak_time=peak_time,
+        width=np.array([p.width for p in chosen]),
+        arrival_time=np.array([p.arrival_time for p in chosen]),
+        peak_mean_force=np.array([p.peak for p in mean]),
+        speed=wave_speed(in_balls[where], peak_time),
+        speed_si=None if in_metres is None else wave_speed(in_metres[where], peak_time),
+        arrival=float(arrival))
+
+
+def _leaving_side(pair: list[Pulse]) -> int:
+    """The side the wave leaves through: of the sides with a pulse, the one whose pulse
+    starts later (its ``onset``, known even for a pulse cut off before its peak);
+    side 1 on a tie or without a pulse."""
+    t0, t1 = (-math.inf if math.isnan(p.onset) else p.onset for p in pair)
+    return 0 if t0 > t1 else 1
