@@ -9,11 +9,12 @@ and ``cli`` (the ``chainrun`` command); ``api`` is the same from Python::
     ds = chainrun.simulate("cradle.toml")      # an xarray Dataset
     ds = chainrun.open_run("results/cradle/run.h5")
     ds = chainrun.open_sweep("results/disorder")  # every run, along a dimension "run"
+    p = chainrun.pulses("results/solitary/run.h5")  # force sensors: pulses, wave speed
 """
 
 __version__ = "0.1.0"
 
-__all__ = ["open_run", "open_sweep", "simulate"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate"]
 
 
 def __getattr__(name):

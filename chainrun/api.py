@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["open_run", "open_sweep", "simulate"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
 
@@ -345,3 +345,80 @@ def simulate(config=None, /, **tables) -> "xarray.Dataset | xarray.DataTree":  #
     if not experiment.sweep:
         return out[specs[0].run_id]
     return xr.DataTree.from_dict(out, name=experiment.name)
+
+
+# ------------------------------------------------------------------------------ pulses
+def pulses(run) -> "xarray.Dataset":  # noqa: F821
+    """The first pulse at each force sensor of a run, and the wave's speed, as a Dataset.
+
+    ``chainrun.analysis.pulse.measure_pulses`` measures them; its module's docstring
+    defines each number. The run is a run file's path or a ``chainrun.store.RunData``
+    (a Dataset from ``open_run`` or ``simulate`` does not hold the line's diameters and
+    gaps that the speed in m/s needs: give the run file).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``sensor`` (the sensor balls). Variables: ``peak_force``,
+        ``peak_time``, ``width`` (FWHM), ``arrival_time`` of the first pulse of the
+        contact the wave leaves each sensor ball through (``side``: 0 towards ball 1,
+        1 away from it), and ``peak_mean_force``, the peak of the ball's mean force
+        (what a sensor embedded in it measures); the wave's speed ``wave_speed`` and
+        its standard uncertainty ``wave_speed_error`` (balls per unit time; the
+        uncertainty is NaN with two sensors), and for spheres with diameters
+        ``wave_speed_si`` and ``wave_speed_si_error`` (m/s). Every variable has
+        ``units`` and ``long_name``; NaN where a pulse was not reached or was cut off.
+
+    Raises
+    ------
+    chainrun.errors.ChainrunError
+        For a run without force sensors; ``chainrun.errors.StoreError`` for a file
+        that is not a readable run file.
+
+    Examples
+    --------
+    >>> p = chainrun.pulses("results/solitary/run.h5")     # doctest: +SKIP
+    >>> p.peak_force.sel(sensor=40).item(), p.wave_speed.item()  # doctest: +SKIP
+    (0.63955..., 0.84050...)
+    """
+    import xarray as xr
+
+    from chainrun.analysis.pulse import measure_pulses
+    from chainrun.units import UNITS
+
+    p = measure_pulses(run)
+    si = p.units == "si"
+
+    def unit(quantity: str) -> str:
+        return UNITS["si"][quantity] if si else _UNITS
+
+    per_sensor = {
+        "peak_force": (p.peak_force, "force", "largest contact force of the first pulse"),
+        "peak_time": (p.peak_time, "time", "time of the peak contact force"),
+        "width": (p.width, "time", "full width at half maximum of the first pulse"),
+        "arrival_time": (p.arrival_time, "time",
+                         f"time the first pulse's rising edge reaches {p.arrival:g} of "
+                         "the way from the baseline to its peak"),
+        "peak_mean_force": (p.peak_mean_force, "force",
+                            "peak of the first pulse of the mean of the two contact "
+                            "forces: what a sensor embedded in the ball measures"),
+    }
+    data = {name: ("sensor", values, {"units": unit(q), "long_name": text})
+            for name, (values, q, text) in per_sensor.items()}
+    data["side"] = ("sensor", p.side, {"long_name": "the contact measured (a number, "
+                                                    "not a quantity): 0 towards ball 1, "
+                                                    "1 away from it"})
+    per_time = "ball/s" if si else "balls per unit time (paper units)"
+    speeds = [("wave_speed", p.speed, per_time, "balls per unit time")]
+    if p.speed_si is not None:
+        speeds.append(("wave_speed_si", p.speed_si, "m/s", "metres per second"))
+    for name, speed, units, what in speeds:
+        data[name] = ((), speed.value, {
+            "units": units, "long_name": f"wave speed in {what}: least-squares slope of "
+                                         f"the measured contacts' positions against their "
+                                         f"peak times ({speed.points} sensors)"})
+        data[f"{name}_error"] = ((), speed.error, {
+            "units": units, "long_name": "standard uncertainty of the wave speed, from the "
+                                         "fit's residuals (NaN with two sensors)"})
+    return xr.Dataset(data, coords={"sensor": ("sensor", p.balls)},
+                      attrs={"units": "SI" if si else _UNITS, "arrival_fraction": p.arrival})
