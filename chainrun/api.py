@@ -351,10 +351,9 @@ def simulate(config=None, /, **tables) -> "xarray.Dataset | xarray.DataTree":  #
 def pulses(run) -> "xarray.Dataset":  # noqa: F821
     """The first pulse at each force sensor of a run, and the wave's speed, as a Dataset.
 
-    ``chainrun.analysis.pulse.measure_pulses`` measures them; its module's docstring
-    defines each number. The run is a run file's path or a ``chainrun.store.RunData``
-    (a Dataset from ``open_run`` or ``simulate`` does not hold the line's diameters and
-    gaps that the speed in m/s needs: give the run file).
+    ``chainrun.analysis.pulse`` measures them; its module's docstring defines each
+    number. The run is a Dataset from ``open_run`` or ``simulate``, a run file's path,
+    or a ``chainrun.store.RunData``.
 
     Returns
     -------
@@ -377,16 +376,34 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
 
     Examples
     --------
-    >>> p = chainrun.pulses("results/solitary/run.h5")     # doctest: +SKIP
-    >>> p.peak_force.sel(sensor=40).item(), p.wave_speed.item()  # doctest: +SKIP
+    >>> ds = chainrun.simulate(chain={"n": 60, "k": 1, "alpha": 1.5},  # doctest: +SKIP
+    ...                        output={"sensors": [20, 30, 40, 50], "sensor_dt": 0.01},
+    ...                        solver={"t_end": 75.0})
+    >>> p = chainrun.pulses(ds)                                       # doctest: +SKIP
+    >>> p.peak_force.sel(sensor=40).item(), p.wave_speed.item()       # doctest: +SKIP
     (0.63955..., 0.84050...)
     """
+    import numpy as np
     import xarray as xr
 
-    from chainrun.analysis.pulse import measure_pulses
+    from chainrun.analysis.pulse import measure_pulses, measure_sensors
+    from chainrun.errors import ChainrunError
     from chainrun.units import UNITS
 
-    p = measure_pulses(run)
+    if isinstance(run, xr.Dataset):
+        if "sensor_force" not in run:
+            raise ChainrunError("pulses: no force sensors in this run; give "
+                                "output.sensors and output.sensor_dt to record them")
+        p = measure_sensors(
+            run["sample"].values, run["sensor_force"].transpose("sample", "sensor", "side").values,
+            run["sensor"].values, units="si" if run.attrs.get("units") == "SI" else "paper",
+            diameter=run["diameter"].values if "diameter" in run else None,
+            gap=run["gap"].values if "gap" in run else None,
+            wall_gap=tuple(np.nan_to_num(run["wall_gap"].values)) if "wall_gap" in run
+            else (0.0, 0.0),
+            min_rise=1e-9 * float(run.attrs.get("scales_force", 1.0)))
+    else:
+        p = measure_pulses(run)
     si = p.units == "si"
 
     def unit(quantity: str) -> str:

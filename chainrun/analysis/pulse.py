@@ -4,8 +4,9 @@ This module owns what a pulse is and how it is measured, for any run with force
 sensors (``output.sensors``) and for any force trace on a uniform time grid: the peak of
 the first pulse, the time of that peak, its full width at half maximum, its arrival
 time, and the speed of a wave fitted through several sensors' peak times.
-``measure_pulses`` applies them to a run; ``first_pulse``, ``parabola_peak`` and
-``wave_speed`` are the pieces (the gallery's recipes use them too).
+``measure_pulses`` applies them to a run (``measure_sensors`` to its sensors' arrays);
+``first_pulse``, ``parabola_peak``, ``wave_speed`` and ``contact_places`` are the pieces
+(the gallery's recipes use them too).
 
 Definitions (every quantity in the run's own units):
 
@@ -56,8 +57,8 @@ import numpy as np
 from chainrun.errors import ChainrunError
 from chainrun.store import RunData, read_run
 
-__all__ = ["Pulse", "Pulses", "WaveSpeed", "first_pulse", "measure_pulses", "parabola_peak",
-           "wave_speed"]
+__all__ = ["Pulse", "Pulses", "WaveSpeed", "contact_places", "first_pulse", "measure_pulses",
+           "measure_sensors", "parabola_peak", "wave_speed"]
 
 _NAN = math.nan
 
@@ -257,30 +258,32 @@ def wave_speed(positions, times) -> WaveSpeed:
     return WaveSpeed(float(p[0]), float(math.sqrt(cov[0, 0])), int(x.size))
 
 
-def _contact_places(run: RunData) -> tuple[np.ndarray, np.ndarray | None]:
-    """Where each contact of the line is, in balls and (for spheres) in metres.
+def contact_places(diameter=None, gap=None, wall_gap=(0.0, 0.0)) -> np.ndarray:
+    """Where each contact of a line of spheres is, in metres, at the start.
 
-    Returns ``(balls, metres)``, each of shape (N + 1,): entry j is the contact between
-    balls j and j + 1 (1-based; 0 and N are the walls' places, or where they would be).
-    In balls it is j + 1/2; in metres ball 1's centre is 0, centres are the radii plus
-    the gap apart, and a contact sits in the middle of its gap.
+    Ball 1's centre is at 0, each centre the two radii plus their gap beyond the one
+    before, and a contact sits in the middle of its gap.
+
+    Parameters
+    ----------
+    diameter : ndarray, shape (N,)
+    gap : ndarray, shape (N - 1,)
+        The gap of each contact (< 0: an overlap).
+    wall_gap : (float, float)
+        The left and right walls' gaps (0 where there is no wall).
+
+    Returns
+    -------
+    ndarray, shape (N + 1,)
+        Entry j is the contact between balls j and j + 1 (1-based; 0 and N are the
+        walls', or where they would be).
     """
-    n = run.n
-    in_balls = np.arange(n + 1) + 0.5
-    model = run.model
-    if model is None or model.get("diameter") is None:
-        return in_balls, None
-    r = 0.5 * np.asarray(model["diameter"], dtype=float)
-    walls = model.get("walls") or {}
-    gap = np.concatenate([[walls.get("left", {}).get("gap", 0.0)],
-                          np.asarray(model["gap"], dtype=float),
-                          [walls.get("right", {}).get("gap", 0.0)]])
-    centre = np.concatenate([[0.0], np.cumsum(r[:-1] + r[1:] + gap[1:-1])])
+    r = 0.5 * np.asarray(diameter, dtype=float)
+    g = np.concatenate([[wall_gap[0]], np.asarray(gap, dtype=float), [wall_gap[1]]])
+    centre = np.concatenate([[0.0], np.cumsum(r[:-1] + r[1:] + g[1:-1])])
     # contact j is half its gap left of ball j + 1's left surface; the right wall's,
     # half its gap right of ball N's right surface
-    in_metres = np.concatenate([centre - r - 0.5 * gap[:-1],
-                                [centre[-1] + r[-1] + 0.5 * gap[-1]]])
-    return in_balls, in_metres
+    return np.concatenate([centre - r - 0.5 * g[:-1], [centre[-1] + r[-1] + 0.5 * g[-1]]])
 
 
 def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) -> Pulses:
@@ -314,16 +317,57 @@ def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) 
     """
     if not isinstance(run, RunData):
         run = read_run(run)
-    if not 0.0 < arrival < 1.0:
-        raise ChainrunError(f"arrival: must be within (0, 1), got {arrival!r}")
-    balls = np.asarray(run.sensor_balls, dtype=np.int64)
-    if not balls.size:
+    model = run.model or {}
+    walls = model.get("walls") or {}
+    if not run.sensor_balls.size:
         raise ChainrunError(f"{run.path}: no force sensors in this run; give "
                             "output.sensors and output.sensor_dt to record them")
     if min_rise is None:
-        scales = (run.model or {}).get("scales") or {}
-        min_rise = 1e-9 * float(scales.get("force", 1.0))
-    t, force = run.sensor_time, np.asarray(run.sensor_force, dtype=float)
+        min_rise = 1e-9 * float((model.get("scales") or {}).get("force", 1.0))
+    return measure_sensors(
+        run.sensor_time, run.sensor_force, run.sensor_balls, units=run.units,
+        diameter=model.get("diameter"), gap=model.get("gap"),
+        wall_gap=tuple(walls.get(side, {}).get("gap", 0.0) for side in ("left", "right")),
+        arrival=arrival, min_rise=min_rise)
+
+
+def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, gap=None,
+                    wall_gap=(0.0, 0.0), arrival: float = 0.1,
+                    min_rise: float = 1e-9) -> Pulses:
+    """``measure_pulses`` on the arrays of a run's force sensors.
+
+    Parameters
+    ----------
+    time : ndarray, shape (M,)
+        The sample times (equally spaced).
+    force : ndarray, shape (M, S, 2)
+        Each sensor's contact force towards ball 1 (side 0) and away from it (side 1).
+    balls : ndarray of int, shape (S,)
+        The sensor balls (1..N).
+    units : str
+        ``"paper"`` or ``"si"``: recorded in the result.
+    diameter, gap, wall_gap
+        For spheres, as ``contact_places`` takes them: the speed in m/s. Without
+        ``diameter``, no speed in m/s.
+    arrival, min_rise : float
+        As ``measure_pulses`` takes them (``min_rise`` in force units).
+
+    Returns
+    -------
+    Pulses
+
+    Raises
+    ------
+    ChainrunError
+        Without sensors, or for an ``arrival`` outside (0, 1).
+    """
+    if not 0.0 < arrival < 1.0:
+        raise ChainrunError(f"arrival: must be within (0, 1), got {arrival!r}")
+    balls = np.asarray(balls, dtype=np.int64)
+    if not balls.size:
+        raise ChainrunError("no force sensors; give output.sensors and output.sensor_dt "
+                            "to record them")
+    t, force = np.asarray(time, dtype=float), np.asarray(force, dtype=float)
 
     def measure(trace) -> Pulse:
         return first_pulse(t, trace, arrival=arrival, min_rise=min_rise)
@@ -334,16 +378,17 @@ def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) 
     mean = [measure(force[:, s, :].mean(axis=1)) for s in range(balls.size)]
 
     peak_time = np.array([p.peak_time for p in chosen])
-    in_balls, in_metres = _contact_places(run)
-    where = balls - 1 + side   # index of each measured contact in the places
+    where = balls - 1 + side   # each measured contact: j joins balls j and j + 1
+    speed_si = None
+    if diameter is not None:
+        speed_si = wave_speed(contact_places(diameter, gap, wall_gap)[where], peak_time)
     return Pulses(
-        units=run.units, balls=balls, side=side,
+        units=units, balls=balls, side=side,
         peak_force=np.array([p.peak for p in chosen]), peak_time=peak_time,
         width=np.array([p.width for p in chosen]),
         arrival_time=np.array([p.arrival_time for p in chosen]),
         peak_mean_force=np.array([p.peak for p in mean]),
-        speed=wave_speed(in_balls[where], peak_time),
-        speed_si=None if in_metres is None else wave_speed(in_metres[where], peak_time),
+        speed=wave_speed(where + 0.5, peak_time), speed_si=speed_si,
         arrival=float(arrival))
 
 

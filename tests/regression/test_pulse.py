@@ -14,6 +14,7 @@ from functools import cache
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy import integrate, optimize
 
 import chainrun
@@ -165,6 +166,8 @@ t_end = {T_END * T!r}
     assert all(ds[name].attrs["long_name"] for name in ds.data_vars)
     np.testing.assert_array_equal(ds.peak_force.values, p.peak_force)
     assert ds.wave_speed_si.item() == p.speed_si.value
+    # the run's Dataset holds what the file does: the same measurements
+    xr.testing.assert_identical(chainrun.pulses(chainrun.open_run(path)), ds)
 
 
 def test_the_first_of_two_pulses_is_measured(tmp_path):
@@ -189,7 +192,9 @@ def test_sensors_the_wave_does_not_reach_and_no_sensors(tmp_path):
         assert np.isnan(ds[name].sel(sensor=[30, 50]).values).all()
     assert math.isnan(ds.wave_speed.item()) and math.isnan(ds.wave_speed_error.item())
     assert "wave_speed_si" not in ds
+    xr.testing.assert_identical(chainrun.pulses(chainrun.open_run(path)), ds)
     (tmp_path / "bare").mkdir()
     bare = _simulate(tmp_path / "bare", "[chain]\nn = 5\nk = 1\nalpha = 1.5\n")
-    with pytest.raises(chainrun.errors.ChainrunError, match="no force sensors"):
-        chainrun.pulses(bare)
+    for run in (bare, chainrun.open_run(bare)):
+        with pytest.raises(chainrun.errors.ChainrunError, match="no force sensors"):
+            chainrun.pulses(run)
