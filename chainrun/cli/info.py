@@ -42,9 +42,45 @@ def _shares(s) -> str:
     return f"of the impact energy {format_value(s.impact, 'energy', s.units)}: {shares}"
 
 
-def render(s) -> str:
+def _pulse_lines(p) -> list[str]:
+    """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
+    the wave's speed when two sensors or more saw it."""
+    from chainrun.units import format_value, scale_for
+
+    def t(x):
+        return format_value(float(x), "time", p.units, 5)
+
+    def f(x):
+        return format_value(float(x), "force", p.units, 5)
+
+    lines = []
+    for i, ball in enumerate(p.balls):
+        if not np.isfinite(p.peak_force[i]):
+            lines.append(f"ball {ball}: no whole pulse recorded")
+            continue
+        lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])} at "
+                     f"{t(p.peak_time[i])}, width (FWHM) {t(p.width[i])}, arrival "
+                     f"{t(p.arrival_time[i])}; peak of the mean force "
+                     f"{f(p.peak_mean_force[i])}")
+    speed = p.speed_si if p.speed_si is not None else p.speed
+    if speed.points >= 2 and np.isfinite(speed.value):
+        if p.speed_si is not None:
+            scaled = scale_for("velocity", "si", [speed.value])
+            value = f"{scaled(speed.value):.6g} {scaled.unit}"
+            error = (f" +- {scaled(speed.error):.2g} {scaled.unit}"
+                     if np.isfinite(speed.error) else "")
+        else:
+            value, error = f"{speed.value:.6g} balls per unit time", (
+                f" +- {speed.error:.2g}" if np.isfinite(speed.error) else "")
+        lines.append(f"wave speed {value}{error} (a fit through {speed.points} sensors' "
+                     "peak times" + ("; no uncertainty from two" if speed.points == 2
+                                     else "") + ")")
+    return [("pulses    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
+
+
+def render(s, pulses=None) -> str:
     """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text, in the
-    run's units."""
+    run's units; ``pulses`` (``chainrun.analysis.pulse.Pulses``) adds a section."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
     from chainrun.runner import momentum_text
@@ -89,6 +125,7 @@ def render(s) -> str:
         f"impact speed, {threshold}), {s.left_behind} left behind",
         f"energy    {_shares(s)}",
         *damping,
+        *(_pulse_lines(pulses) if pulses is not None else []),
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
     ]
@@ -147,6 +184,13 @@ def render_folder(path: Path, summaries) -> str:
     return "\n".join(lines)
 
 
+def _pulses(run):
+    """The run's pulse measurements, or None for a run without sensors."""
+    from chainrun.analysis.pulse import measure_pulses
+
+    return measure_pulses(run) if run.sensor_balls.size else None
+
+
 @click.command()
 @click.argument("paths", nargs=-1, required=True,
                 type=click.Path(exists=True, path_type=Path))
@@ -159,7 +203,9 @@ def info(paths: tuple[Path, ...]):
     balls with the largest forward and backward velocities, how many balls rebound,
     are ejected (moving forward faster than 1% of the impact speed) or are left
     behind, how the impact energy is shared among them, the contacts and walls and
-    the damping, and what the file stores. For an output folder (a sweep or an
+    the damping, the pulses its force sensors recorded (the peak contact force, its
+    time, the pulse's width and arrival at each sensor, and the wave's speed fitted
+    through them), and what the file stores. For an output folder (a sweep or an
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
     deviation and range of each number over the runs; the full summary when the
     folder holds a single run.
@@ -184,10 +230,12 @@ def info(paths: tuple[Path, ...]):
                 rows = read_index(index)
                 summaries = [summarize(read_run(path / str(r["file"]))) for r in rows]
                 if len(summaries) == 1:
-                    click.echo(render(summaries[0]))
+                    run = read_run(path / str(rows[0]["file"]))
+                    click.echo(render(summaries[0], _pulses(run)))
                 else:
                     click.echo(render_folder(path, summaries))
             else:
-                click.echo(render(summarize(read_run(path))))
+                run = read_run(path)
+                click.echo(render(summarize(run), _pulses(run)))
     except ChainrunError as exc:
         fail(str(exc))

@@ -170,3 +170,26 @@ def test_an_si_run_speaks_si(tmp_path):
     assert f"t = {end * 1e6:.6g} µs" in field(out, "outcome")
     assert f"at {v.max() * 1e3:.6g} mm/s" in field(out, "balls")
     assert re.search(r"impact energy [\d.]+ mJ", field(out, "energy"))
+
+
+def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
+    """Sensors in a chain of steel beads struck at 0.5 m/s: each records the solitary
+    wave, whose peak contact force is 0.63955 in the paper's units (0.640 printed in
+    its section 5a), here in newtons through the paper's scales."""
+    out = tmp_path / "sol"
+    config = tmp_path / "sol.toml"
+    config.write_text('name = "sol"\nunits = "si"\n[chain]\nn = 40\nk = 1\nspeed = 0.5\n'
+                      'diameter = 0.0254\nmaterial = "steel"\n[output]\nsensors = [15, 25]\n'
+                      'sensor_dt = 2.0e-7\n[solver]\nt_end = 1.2e-3\n')
+    assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+    out_text = info(out / "run.h5").stdout
+    young, poisson, rho, d, v = 207e9, 0.30, 7850.0, 0.0254, 0.5  # materials: steel
+    k = young * d**0.5 / (3 * (1 - poisson**2))
+    m = rho * np.pi * d**3 / 6
+    force = k**0.4 * m**0.6 * v**1.2
+    lines = [line for line in out_text.splitlines() if "peak contact force" in line]
+    assert [line.split(": peak")[0].split()[-1] for line in lines] == ["15", "25"]
+    for line in lines:
+        newtons = float(re.search(r"peak contact force ([\d.]+) N", line).group(1))
+        assert newtons == pytest.approx(0.63955 * force, rel=2e-4)
+    assert re.search(r"wave speed [\d.]+ m/s \(a fit through 2 sensors", out_text)

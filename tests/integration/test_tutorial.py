@@ -35,6 +35,8 @@ def test_the_tutorial_runs(tmp_path):
     peaks = [float(line.split("peak force ")[1].split()[0]) for line in beads
              if "peak force" in line]
     assert len(peaks) == 2 and peaks[0] > peaks[1] > 0  # the damped wave weakens
+    speed = float(next(line for line in beads if "wave runs at" in line).split()[-2])
+    assert 300 < speed < 700  # m/s: between the two sensors, 10 diameters of 8 mm apart
     assert float(beads[-1].split("balance to ")[1].split(",")[0]) < 1e-9
     ensemble = [line for line in lines if line.startswith("ensemble")]
     assert ensemble[0].startswith("ensemble: 8 runs")
