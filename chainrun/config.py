@@ -12,7 +12,7 @@ The schema (TOML shown; YAML has the same structure)::
     description = "..."              # optional
     [chain]
     n = 5                            # balls, 1 <= n < 2**63 (memory is checked when run)
-    k = 1                            # impacting balls at velocity 1, 1 <= k <= n
+    k = 1                            # impacting balls at velocity 1, 0 <= k <= n
     alpha = 1.5                      # contact exponent, >= 1 (1 linear, 1.5 Hertz)
     # any line (docs/guide.md): per ball mass, velocity (instead of k), force, and in SI
     # diameter, material (or young, poisson, density); per contact stiffness, alpha
@@ -519,7 +519,7 @@ class Chain(BaseModel):
 
     n: _Int = Field(ge=1)
     velocity: Annotated[Any, _values("velocity"), _Dump] = None
-    k: _OptInt = Field(None, ge=1, validate_default=True)
+    k: _OptInt = Field(None, ge=0, validate_default=True)
     speed: _OptFloat = None
     material: Annotated[Any, _values("material", text=True), _Dump] = None
     young: Annotated[Any, _values("young"), _Dump] = None
@@ -708,7 +708,9 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
     wall of a ``material`` is a flat body of it (R* = R of the end ball), and a wall
     with neither stiffness nor material is of the end ball's material. With
     ``precompression`` the resting balls start at equilibrium under that load
-    (``chainrun.solver.model.precompress``).
+    (``chainrun.solver.model.precompress``): pushed by a constant force against the
+    right wall, or, between two walls, held by them, the left wall placed where every
+    contact carries the load.
 
     Raises
     ------
@@ -824,6 +826,10 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
         if force is not None and np.any(force != 0.0):
             raise LineError([_Problem("chain.precompression", "sets the external force "
                                       "itself; leave chain.force out")])
+        if walls.left is not None and walls.right is not None and walls.left.gap != 0.0:
+            raise LineError([_Problem("walls.left.gap", "set by chain.precompression "
+                                      "between two walls (the left wall is placed where "
+                                      "every contact carries the load); leave it out")])
         try:
             line = precompress(line, chain.precompression)
         except ValueError as exc:
@@ -907,7 +913,7 @@ def _needs_t_end(chain: Chain, walls: "Walls", t_end: float | None) -> list["_Pr
     if t_end is not None:
         return []
     reasons = []
-    if chain.precompression:
+    if chain.precompression and walls.left is None:
         reasons.append("chain.precompression keeps pushing")
     elif isinstance(chain.force, float) and chain.force != 0.0:
         reasons.append("chain.force keeps doing work")

@@ -56,8 +56,10 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     {taper = 0.9, start = 1}, {random = "uniform", low = 0.5, high = 2, seed = 1}
     (or "lognormal" with median, sigma), {value = 1, impurity = {at = 20, value =
     0.1}} (at counts from 1), {file = "m.npy"} (or .csv, beside CONFIG). chain.k
-    and chain.speed set the first k balls moving; chain.precompression = F0 holds
-    the resting balls against a right wall. [walls.left] and [walls.right] take
+    and chain.speed set the first k balls moving (k = 0: a line at rest);
+    chain.precompression = F0 holds the resting balls against a right wall, or,
+    with both walls and k = 0, loads every contact with F0 between them (the left
+    wall placed so). [walls.left] and [walls.right] take
     stiffness, alpha, gap. units = "si" adds per-ball diameter (m) and material
     (steel, stainless_steel, chrome_steel, brass, aluminium, glass, ptfe,
     tungsten_carbide; or young, poisson, density): masses and Hertz contacts follow,

@@ -320,25 +320,33 @@ def strikers(line: Line) -> int:
 
 
 def precompress(line: Line, load: float) -> Line:
-    """``line`` with its resting balls held against the right wall by the force ``load``.
+    """``line`` at rest in its static state under the load ``load``, pushed at the right wall.
 
-    The strikers (balls 1..K, ``strikers``) keep their velocities; balls K+1..N start at
-    the static equilibrium under a constant external force ``load`` on ball K+1,
-    pointing at the right wall (+x), which keeps acting during the run. Every contact
-    from K+1 to the wall then carries ``load``, so the force law gives the positions
-    exactly, from the wall back:
+    Against one wall (a right wall, no left one), the strikers (balls 1..K,
+    ``strikers``) keep their velocities; balls K+1..N start at the static equilibrium
+    under a constant external force ``load`` on ball K+1, pointing at the right wall
+    (+x), which keeps acting during the run. Every contact from K+1 to the wall then
+    carries ``load``, so the force law gives the positions exactly, from the wall back:
 
         x_N = g_R + (F0/k_R)^(1/a_R),   x_j = x_{j+1} + g_j + (F0/k_j)^(1/a_j)
 
     for j = N-1 down to K+1. The strikers are moved by x_{K+1}, so that they meet ball
-    K+1 as they would without the load. The line must have a right wall, no external
-    force of its own, a ball after the strikers, and those balls at rest; ``load`` > 0.
-    The result has a force that keeps doing work: it has no terminal state.
+    K+1 as they would without the load. The result has a force that keeps doing work:
+    it has no terminal state.
+
+    Between two walls, no external force acts: the left wall (an actuator) is placed
+    where every contact, both walls' included, carries ``load`` at rest. The balls take
+    the same positions (j = N-1 down to 1) and the left wall the gap
+    ``g_L = -x_1 - (F0/k_L)^(1/a_L)``; every ball must be at rest (no strikers).
+
+    The line must have a right wall, no external force of its own, a ball after the
+    strikers, and those balls at rest; ``load`` > 0.
 
     Returns
     -------
     Line
-        A new line, with ``position`` and ``force`` set.
+        A new line, with ``position`` and ``force`` (one wall) or the left wall's
+        ``gap`` (two walls) set.
     """
     load = float(load)
     if not (math.isfinite(load) and load > 0.0):
@@ -347,7 +355,11 @@ def precompress(line: Line, load: float) -> Line:
         raise ValueError("precompression needs a right wall to push against")
     if np.any(line.force != 0.0):
         raise ValueError("precompression sets the external forces; the line has its own")
+    between = line.left is not None
     k = strikers(line)
+    if between and k:
+        raise ValueError("precompression between two walls holds every ball at rest in "
+                         "its static state: the line must start at rest (k = 0); ball 1 moves")
     if k >= line.n:
         raise ValueError("precompression needs a ball at rest after the strikers")
     moving = np.flatnonzero(line.velocity[k:])
@@ -361,6 +373,10 @@ def precompress(line: Line, load: float) -> Line:
     # summed from the wall back (the order of a loop from j = N-2 down to K)
     step = line.gap[k:] + (load / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
     x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    if between:
+        left = line.left
+        gap = -x[0] - (load / left.stiffness) ** (1.0 / left.alpha)
+        return replace(line, position=x, left=replace(left, gap=float(gap)))
     x[:k] = line.position[:k] + x[k]
     force = np.zeros(line.n)
     force[k] = load

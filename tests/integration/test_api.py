@@ -136,3 +136,20 @@ def test_the_dataset_holds_the_whole_line_numbered_one_way(tmp_path):
     assert contacts <= set(range(0, 7)) and 6 in contacts  # 6 = N: the right wall
     assert ds.contact_dissipation.sum().item() + ds.wall_dissipation.sum().item() == \
         pytest.approx(ds.attrs["dissipated_energy"], rel=1e-12)
+
+
+def test_a_line_at_rest_ends_at_once_and_a_held_line_stays_put():
+    # nothing moves, no force acts: the line starts in its terminal state
+    ds = chainrun.simulate(chain={"n": 5, "k": 0, "alpha": 1.5})
+    assert ds.attrs["outcome"] == "terminal" and ds.attrs["end_time"] == 0.0
+    assert not np.any(ds.final_velocity.values)
+    # precompressed between two walls: at rest in its static state until t_end
+    ds = chainrun.simulate(chain={"n": 6, "k": 0, "alpha": 1.5, "precompression": 2.0},
+                           walls={"left": {}, "right": {}}, solver={"t_end": 20.0},
+                           output={"times": {"start": 0, "stop": 20, "step": 5}})
+    assert ds.attrs["outcome"] == "stop_time"
+    x0 = ds.position.isel(time=0)
+    # static compression 2^(2/3) per contact, so the balls sit at 1.59 ... 9.52
+    np.testing.assert_allclose(x0.values, 2.0 ** (2 / 3) * np.arange(6, 0, -1), rtol=1e-14)
+    assert float(abs(ds.position - x0).max()) < 1e-13
+    assert float(abs(ds.velocity).max()) < 1e-13

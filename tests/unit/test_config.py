@@ -226,7 +226,7 @@ def test_unknown_key_suggests():
     [
         ("n = 5\nk = 6\nalpha = 1.5", "chain.k: must be <= chain.n (5), got 6"),
         ("n = 0\nk = 1\nalpha = 1.5", "chain.n: must be >= 1, got 0"),
-        ("n = 5\nk = 0\nalpha = 1.5", "chain.k: must be >= 1, got 0"),
+        ("n = 5\nk = -1\nalpha = 1.5", "chain.k: must be >= 0, got -1"),
         ("n = 5\nk = 1\nalpha = 0.5", "chain.alpha: must be >= 1, got 0.5"),
         ('n = "five"\nk = 1\nalpha = 1.5', "chain.n: expected an integer, got 'five'"),
         ('n = "3"\nk = 1\nalpha = 1.5', "chain.n: expected an integer, got '3'"),

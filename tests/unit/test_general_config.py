@@ -246,6 +246,49 @@ def test_precompression_needs_a_wall_and_t_end():
     assert line.force[1] == 1.0 and line.position[-1] == 1.0
 
 
+def test_precompression_between_two_walls_loads_every_contact():
+    rng = np.random.default_rng(7)
+    n = 9
+    line = Line.make(n, mass=rng.uniform(0.5, 2, n), stiffness=rng.uniform(0.5, 2, n - 1),
+                     alpha=rng.choice([1.0, 1.5, 2.5], n - 1), gap=rng.uniform(-0.05, 0.1, n - 1),
+                     k=0, left=Wall(2.0, 1.0, 0.3), right=Wall(3.0, 1.5, 0.05))
+    load = 0.7
+    p = precompress(line, load)
+    F = _contact_forces(p)
+    np.testing.assert_allclose(F, load, rtol=1e-14)  # both walls' contacts included
+    assert not np.any(p.force) and not np.any(p.velocity)
+    # the balls sit where the one-wall precompression puts them; only the left wall moves
+    one = precompress(dataclasses.replace(line, left=None), load)
+    np.testing.assert_array_equal(p.position, one.position)
+    assert p.left.stiffness == 2.0 and p.left.alpha == 1.0 and p.right == line.right
+    assert not p.has_terminal_state
+
+
+def test_precompression_between_two_walls_from_a_file():
+    text = (HEAD + "[chain]\nn = 4\nk = 0\nalpha = 1.5\nprecompression = 2.0\n"
+            "[walls.left]\n[walls.right]\n")
+    assert problems(text) == ["solver.t_end: required: the line is held between two walls, "
+                              "so the run has no terminal state"]
+    line = line_of(text + "[solver]\nt_end = 1.0\n")
+    np.testing.assert_allclose(_contact_forces(line), 2.0, rtol=1e-14)
+    assert not np.any(line.force)
+    # strikers cannot be held at rest; the left wall's place is the load's to set
+    striking = text.replace("k = 0", "k = 1") + "[solver]\nt_end = 1.0\n"
+    assert problems(striking) == [
+        "chain.precompression: precompression between two walls holds every ball at rest "
+        "in its static state: the line must start at rest (k = 0); ball 1 moves"]
+    placed = text.replace("[walls.left]\n", "[walls.left]\ngap = 0.1\n")
+    assert problems(placed + "[solver]\nt_end = 1.0\n") == [
+        "walls.left.gap: set by chain.precompression between two walls (the left wall is "
+        "placed where every contact carries the load); leave it out"]
+
+
+def test_a_line_at_rest_is_terminal_at_once():
+    (spec,) = parse_experiment(HEAD + "[chain]\nn = 5\nk = 0\nalpha = 1.5\n", "toml").runs()
+    assert spec.k == 0 and strikers(spec.line) == 0
+    assert spec.line.has_terminal_state and not np.any(spec.line.velocity)
+
+
 # --- paper configs stay as they were; sweeps of new keys --------------------------------
 
 
