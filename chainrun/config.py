@@ -1386,11 +1386,13 @@ class Experiment(BaseModel):
             data["walls"] = walls
         return data
 
-    def runs(self) -> list[RunSpec]:
+    def runs(self, *, to_run: bool = True) -> list[RunSpec]:
         """Every run of the experiment: the cartesian product of the sweep.
 
         Keys vary in the order they are written, the last fastest; values in the order
-        given. Without a sweep there is one run, ``run_id == "run"``.
+        given. Without a sweep there is one run, ``run_id == "run"``. ``to_run=False``
+        for lines only analysed at rest (``chainrun spectrum``): a line without a
+        terminal state then needs no ``solver.t_end``.
 
         Returns
         -------
@@ -1431,7 +1433,7 @@ class Experiment(BaseModel):
             else:
                 problems += _times_after_t_end(self.output.times, solver.t_end)
                 problems += _sensor_problems(self.output, solver.t_end)
-                if chain is not None and walls is not None:
+                if chain is not None and walls is not None and to_run:
                     problems += _needs_t_end(chain, walls, solver.t_end)
             if problems:
                 label = f"sweep ({_label(overrides)}): " if overrides else ""
@@ -1627,7 +1629,7 @@ def _translate(exc: ValidationError, prefix: tuple[str, ...] = ()) -> list[_Prob
 
 
 def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
-                   context: dict[str, Any]) -> list[_Problem]:
+                   context: dict[str, Any], to_run: bool = True) -> list[_Problem]:
     """Problems of the line one combination describes: values out of range (by
     index), keys that conflict, a stop time it needs. Nothing when its tables are
     themselves wrong (reported with them)."""
@@ -1644,6 +1646,8 @@ def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
                                               else {}).t_end
     except (ValidationError, TypeError):
         return []
+    if not to_run:
+        t_end = math.inf  # analysed at rest, never run: no stop time is needed
     problems = _needs_t_end(c, w, t_end)
     if not (c.is_paper and w == Walls() and units == "paper") and c.n <= CHECK_MAX_N:
         try:
@@ -1678,7 +1682,7 @@ def _generator_sweep_issues(valid: dict[str, tuple], chain: Any) -> list[_Issue]
     return issues
 
 
-def _validate(data: Any, source: str) -> Experiment:
+def _validate(data: Any, source: str, to_run: bool = True) -> Experiment:
     """The experiment in ``data`` (parsed file contents), every problem reported at once.
 
     Each sweep combination is validated on its own; problems a combination causes are
@@ -1739,7 +1743,7 @@ def _validate(data: Any, source: str) -> Experiment:
             except ValidationError as exc:
                 problems = _translate(exc)
             if not problems:
-                problems = _line_problems(merged, overrides, context)
+                problems = _line_problems(merged, overrides, context, to_run)
         else:  # ... then only the tables the sweep changes
             for table in dict.fromkeys("chain" if key == "replica" else key.split(".")[0]
                                        for key in overrides):
@@ -1751,7 +1755,7 @@ def _validate(data: Any, source: str) -> Experiment:
                         problems += _translate(exc, (table,))
             if not problems and any(k.startswith(("chain.", "walls.", "solver.t_end"))
                                     or k == "replica" for k in overrides):
-                problems = _line_problems(merged, overrides, context)
+                problems = _line_problems(merged, overrides, context, to_run)
         solver = merged.get("solver")
         if output is not None and (solver is None or isinstance(solver, Mapping)):
             try:
@@ -1886,7 +1890,8 @@ def _yaml():
     return yaml, _YamlLoader
 
 
-def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experiment:
+def parse_experiment(text: str, fmt: str, source: str = "<string>", *,
+                     to_run: bool = True) -> Experiment:
     """The experiment described by ``text``.
 
     Parameters
@@ -1897,6 +1902,10 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
         Its format (``"yml"`` is taken as ``"yaml"``).
     source : str
         Where the text came from, for error messages.
+    to_run : bool
+        False for an experiment whose lines are only analysed at rest (``chainrun
+        spectrum``): a line without a terminal state then needs no ``solver.t_end``
+        (pass the same to ``Experiment.runs``).
 
     Returns
     -------
@@ -1928,7 +1937,7 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
     except ValueError as exc:  # tomllib converting a value, e.g. an integer of 5000 digits
         raise ConfigError(source, [one_line(f"cannot read a value ({_value_error(exc)})")]) from None
     try:
-        experiment = _validate(data, source)
+        experiment = _validate(data, source, to_run)
     except RecursionError:  # YAML aliases can nest without end
         raise ConfigError(source, ["nested too deeply to check"]) from None
     experiment._source_text = text  # private attributes are not frozen
@@ -1936,8 +1945,9 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>") -> Experimen
     return experiment
 
 
-def load_experiment(path: str | os.PathLike[str]) -> Experiment:
-    """Read and validate the experiment file at ``path`` (``.toml``, ``.yaml`` or ``.yml``).
+def load_experiment(path: str | os.PathLike[str], *, to_run: bool = True) -> Experiment:
+    """Read and validate the experiment file at ``path`` (``.toml``, ``.yaml`` or ``.yml``);
+    ``to_run`` as for ``parse_experiment``.
 
     Raises
     ------
@@ -1962,4 +1972,4 @@ def load_experiment(path: str | os.PathLike[str]) -> Experiment:
         raise ConfigError(source, [f"not UTF-8 text (byte {exc.start})"]) from None
     except OSError as exc:
         raise ConfigError(source, [f"cannot read: {exc.strerror}"]) from None
-    return parse_experiment(text, FORMATS[suffix], source)
+    return parse_experiment(text, FORMATS[suffix], source, to_run=to_run)
