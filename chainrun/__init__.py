@@ -10,11 +10,12 @@ and ``cli`` (the ``chainrun`` command); ``api`` is the same from Python::
     ds = chainrun.open_run("results/cradle/run.h5")
     ds = chainrun.open_sweep("results/disorder")  # every run, along a dimension "run"
     p = chainrun.pulses("results/solitary/run.h5")  # force sensors: pulses, wave speed
+    ds = chainrun.spectrum("crystal.toml")     # the line's linear spectrum at rest
 """
 
 __version__ = "0.1.0"
 
-__all__ = ["open_run", "open_sweep", "pulses", "simulate"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum"]
 
 
 def __getattr__(name):

@@ -6,6 +6,8 @@ simulate`` (validation, solver, run file) and returns what ``open_run`` reads ba
 that file, so a Dataset made here and one read from the command's file are the same.
 ``open_sweep`` reads every run of an output folder (a sweep, or an ensemble over random
 seeds) as one Dataset along a dimension ``run``.
+``spectrum`` takes what ``simulate`` takes and returns the linear spectrum of the line at rest
+(``chainrun.analysis.spectrum``), as ``chainrun spectrum`` writes it.
 
 Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``contact`` (1..N-1), ``wall`` and
 ``event`` (the contact event log). Quantities are in the run's units: SI for an
@@ -30,7 +32,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["open_run", "open_sweep", "pulses", "simulate"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
 
@@ -270,12 +272,13 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
                                    {"long_name": "events in each run's log"}))
 
 
-def _experiment(config, tables: dict[str, Any]):
+def _experiment(config, tables: dict[str, Any], source: str = "<simulate>",
+                to_run: bool = True):
     from chainrun.config import load_experiment, parse_experiment
     from chainrun.errors import ConfigError
 
     if config is not None and not isinstance(config, (str, os.PathLike, Mapping)):
-        raise ConfigError("<simulate>", [
+        raise ConfigError(source, [
             f"config: expected a path or a dict of the experiment's tables, got "
             f"{type(config).__name__}"])
     if isinstance(config, (str, os.PathLike)):
@@ -283,7 +286,7 @@ def _experiment(config, tables: dict[str, Any]):
             raise ConfigError(os.fspath(config), [
                 "keyword tables are for a config given as a dict, not a file: "
                 + ", ".join(sorted(tables))])
-        return load_experiment(config)
+        return load_experiment(config, to_run=to_run)
     import yaml
 
     data = {"name": "api", **(dict(config) if config is not None else {}), **tables}
@@ -292,7 +295,7 @@ def _experiment(config, tables: dict[str, Any]):
     # reads back as a number (JSON's 1e-06 it would read as text)
     plain = json.loads(json.dumps(data, default=_plain))
     text = yaml.safe_dump(plain, sort_keys=False, default_flow_style=None, width=88)
-    return parse_experiment(text, "yaml", "<simulate>")
+    return parse_experiment(text, "yaml", source, to_run=to_run)
 
 
 def _plain(value):
@@ -439,3 +442,59 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
                                          "fit's residuals (NaN with two sensors)"})
     return xr.Dataset(data, coords={"sensor": ("sensor", p.balls)},
                       attrs={"units": "SI" if si else _UNITS, "arrival_fraction": p.arrival})
+
+
+def spectrum(config=None, /, *, period: int | None = None,
+             **tables) -> "xarray.Dataset | xarray.DataTree":  # noqa: F821
+    """The linear spectrum of an experiment's line at rest in its static state.
+
+    The line is the one ``simulate`` would run, its strikers left out, about its static
+    state (``chain.precompression`` places one): its contacts' linear stiffnesses, the
+    normal modes of the finite line and, for a line that repeats a unit cell, the
+    dispersion relation and band edges (``chainrun.analysis.spectrum``). Nothing is
+    run, so a line held between two walls needs no ``solver.t_end`` here.
+
+    Parameters
+    ----------
+    config : path or dict, optional
+        An experiment file (``.toml``, ``.yaml``), or its tables as a dict.
+    period : int, optional
+        Balls in the unit cell of the dispersion relation: by default the smallest cell
+        the masses and linear stiffnesses repeat (at least twice); 0 for none.
+    **tables
+        Tables of the experiment file as keyword arguments, added to a dict ``config``.
+
+    Returns
+    -------
+    xarray.Dataset, or xarray.DataTree for an experiment with a sweep (a child Dataset
+    per run). ``omega`` (mode): the angular frequencies, ascending, in the inverse of the
+    file's time unit (rad/s in SI); ``frequency`` = omega / (2 pi); ``shape`` (mode,
+    ball), each mode's displacements, largest magnitude 1; per contact
+    ``static_compression``, ``static_force`` and ``linear_stiffness``; for a periodic
+    line ``dispersion`` (q, branch), ``band_bottom`` and ``band_top`` (branch).
+
+    Raises
+    ------
+    chainrun.errors.ConfigError
+        For an invalid experiment, naming every wrong key.
+    chainrun.errors.ChainrunError
+        For a line not at rest in a static state, too long, or not of the ``period``
+        given (one line).
+
+    Examples
+    --------
+    >>> ds = chainrun.spectrum(chain={"n": 20, "k": 0, "alpha": 1.5,
+    ...                               "precompression": 1.0},
+    ...                        walls={"left": {}, "right": {}})
+    >>> ds.omega.values[:3]                        # doctest: +SKIP
+    """
+    import xarray as xr
+
+    from chainrun.analysis.spectrum import run_spectrum
+
+    experiment = _experiment(config, tables, "<spectrum>", to_run=False)
+    out = {spec.run_id: run_spectrum(spec, period=period)
+           for spec in experiment.runs(to_run=False)}
+    if not experiment.sweep:
+        return next(iter(out.values()))
+    return xr.DataTree.from_dict(out, name=experiment.name)

@@ -27,10 +27,11 @@ PAPER = "paper units"
 UNITS: dict[str, dict[str, str]] = {
     "si": {"time": "s", "position": "m", "velocity": "m/s", "mass": "kg", "force": "N",
            "energy": "J", "momentum": "kg m/s", "stiffness": "N m-alpha", "alpha": "1",
-           "gap": "m", "diameter": "m", "frequency": "Hz", "angular_frequency": "rad/s"},
+           "gap": "m", "diameter": "m", "frequency": "Hz", "angular_frequency": "rad/s",
+           "linear_stiffness": "N/m"},
     "paper": dict.fromkeys(("time", "position", "velocity", "mass", "force", "energy",
                             "momentum", "stiffness", "alpha", "gap", "diameter",
-                            "frequency", "angular_frequency"), "1"),
+                            "frequency", "angular_frequency", "linear_stiffness"), "1"),
 }
 
 #: The unit a prefix goes on, for each SI quantity that takes one: a mass in grams, a
@@ -38,7 +39,7 @@ UNITS: dict[str, dict[str, str]] = {
 _BASE = {"time": ("", "s"), "position": ("", "m"), "gap": ("", "m"), "diameter": ("", "m"),
          "velocity": ("", "m/s"), "force": ("", "N"), "energy": ("", "J"),
          "momentum": ("", "N s"), "mass": ("", "g"), "frequency": ("", "Hz"),
-         "angular_frequency": ("", "rad/s")}
+         "angular_frequency": ("", "rad/s"), "linear_stiffness": ("", "N/m")}
 #: a mass is written in grams: 1 kg is 1000 g
 _IN_BASE = {"mass": 1e3}
 _PREFIXES = ((1e12, "T"), (1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"),

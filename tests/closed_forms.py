@@ -119,3 +119,49 @@ def steel_bead() -> tuple[float, float]:
     mass = s["rho"] * math.pi * s["d"] ** 3 / 6.0
     kappa = s["E"] * math.sqrt(s["d"]) / (3.0 * (1.0 - s["nu"] ** 2))
     return mass, kappa
+
+
+# --- small oscillations of a chain of springs (the linear spectrum) ---------------------
+# Masses m joined by springs K in a line (Kittel, Introduction to Solid State Physics,
+# ch. 4; Brillouin, Wave Propagation in Periodic Structures, ch. 1).
+
+
+def modes_between_walls(K: float, m: float, n: int) -> np.ndarray:
+    """omega_j, j = 1..n, of n masses between two fixed walls, n + 1 springs:
+    ``2 sqrt(K/m) sin(j pi / (2 (n + 1)))``."""
+    j = np.arange(1, n + 1)
+    return 2.0 * math.sqrt(K / m) * np.sin(j * math.pi / (2.0 * (n + 1)))
+
+
+def shapes_between_walls(n: int) -> np.ndarray:
+    """Mode j's displacements, shape (n, n): ``sin(i j pi / (n + 1))`` of ball i."""
+    i = np.arange(1, n + 1)
+    return np.sin(np.outer(i, i) * math.pi / (n + 1))
+
+
+def modes_free_and_wall(K: float, m: float, n: int) -> np.ndarray:
+    """omega_j of n masses with one free end and a fixed wall at the other, n springs:
+    ``2 sqrt(K/m) sin((2j - 1) pi / (2 (2n + 1)))``."""
+    j = np.arange(1, n + 1)
+    return 2.0 * math.sqrt(K / m) * np.sin((2 * j - 1) * math.pi / (2.0 * (2 * n + 1)))
+
+
+def monatomic_dispersion(K: float, m: float, q) -> np.ndarray:
+    """omega(q) of the infinite line of equal masses: ``2 sqrt(K/m) |sin(q/2)|``."""
+    return 2.0 * math.sqrt(K / m) * np.abs(np.sin(np.asarray(q, dtype=float) / 2.0))
+
+
+def dimer_band_edges(K: float, m1: float, m2: float) -> tuple[float, float, float]:
+    """The top of the acoustic band, the bottom and top of the optical band of the
+    infinite line of masses m1 > m2 in turn: ``sqrt(2K/m1)``, ``sqrt(2K/m2)``,
+    ``sqrt(2K (1/m1 + 1/m2))``."""
+    return (math.sqrt(2.0 * K / m1), math.sqrt(2.0 * K / m2),
+            math.sqrt(2.0 * K * (1.0 / m1 + 1.0 / m2)))
+
+
+def light_impurity_mode(K: float, m: float, m_light: float) -> float:
+    """The localised mode of one light mass ``m_light = (1 - e) m`` in the infinite line
+    of masses m: ``2 sqrt(K/m) / sqrt(1 - e^2)``, above the band (Montroll & Potts,
+    Phys. Rev. 100, 525 (1955)); its amplitude falls by ``(1 - e)/(1 + e)`` per ball."""
+    e = 1.0 - m_light / m
+    return 2.0 * math.sqrt(K / m) / math.sqrt(1.0 - e * e)

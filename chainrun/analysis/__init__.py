@@ -13,7 +13,10 @@ Modules:
 - ``similarity``: equation (4.9) by shooting and by Airy functions;
 - ``nesterenko``: Nesterenko's long-wave solitary wave;
 - ``linear``, ``hertz``: one recipe per artefact, for alpha = 1 and alpha = 3/2;
-- ``paper``, ``comparison``: the printed numbers and the comparison table.
+- ``paper``, ``comparison``: the printed numbers and the comparison table;
+- ``spectrum``: the linear spectrum of a line at rest (``chainrun spectrum``), from the
+  line itself rather than from runs;
+- ``summary``: a run at a glance (``chainrun info``).
 
 Nothing here imports click or matplotlib.
 """

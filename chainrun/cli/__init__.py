@@ -26,6 +26,7 @@ from chainrun.cli.animate import animate
 from chainrun.cli.info import info
 from chainrun.cli.plot import plot
 from chainrun.cli.simulate import simulate
+from chainrun.cli.spectrum import spectrum
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -46,6 +47,7 @@ def main():
       chainrun info results/table1                   # what the runs hold, at a glance
       chainrun plot --list                           # the paper's figures and tables
       chainrun analyze fig05 && chainrun plot fig05  # one figure from its runs
+      chainrun spectrum configs/examples/granular-crystal.toml   # modes and bands
     """
     # A run leaves a large heap behind (numba, LLVM, scipy, h5py): the interpreter's
     # garbage collections at exit would walk all of it, 0.2-0.3 s of wall time, to free
@@ -60,3 +62,4 @@ main.add_command(info)
 main.add_command(analyze)
 main.add_command(plot)
 main.add_command(animate)
+main.add_command(spectrum)

@@ -1,7 +1,8 @@
 """Plotting: figures and tables drawn from analysis files, and nothing computed anew.
 
 This package owns the look of every output. ``render_run(path)`` draws the standard
-views of any run file (``views``). ``render(name)`` reads the artefact's analysis
+views of any run file (``views``), ``render_spectrum(path)`` the figure of a spectrum
+file (``spectrum``). ``render(name)`` reads the artefact's analysis
 file (through ``chainrun.store``), asks the artefact's module (``chainrun.plotting.figNN``,
 ``table1``, ``comparison``) to draw it, and writes the outputs named in
 ``chainrun.artefacts``:
@@ -25,7 +26,8 @@ from chainrun import artefacts, atomic
 from chainrun.errors import ChainrunError
 from chainrun.store import AnalysisData, read_analysis
 
-__all__ = ["STYLE", "draw", "render", "render_run", "render_sweep", "style"]
+__all__ = ["STYLE", "draw", "render", "render_run", "render_spectrum", "render_sweep",
+           "style"]
 
 #: The one matplotlib style of chainrun, shipped in the package.
 STYLE = Path(__file__).with_name("chainrun.mplstyle")
@@ -181,3 +183,27 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
             _save(figure, outputs)
             written += outputs
     return written
+
+
+def render_spectrum(path, *, out=None) -> list[Path]:
+    """Draw the spectrum file at ``path`` (``chainrun.store.write_spectrum``): its
+    modes and, for a periodic line, its dispersion relation and bands
+    (``spectrum.draw_spectrum``), to ``<out>/<file stem>.png`` and ``.pdf`` (``out``
+    defaults to the file's folder). Returns the files written.
+
+    Raises
+    ------
+    ChainrunError
+        If the file is not a spectrum file.
+    """
+    from chainrun.plotting.spectrum import draw_spectrum
+    from chainrun.store import read_spectrum
+
+    path = Path(path)
+    ds = read_spectrum(path)
+    out = path.parent if out is None else Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    outputs = [out / f"{path.stem}{suffix}" for suffix in (".png", ".pdf")]
+    with style():
+        _save(draw_spectrum(ds), outputs)
+    return outputs
