@@ -32,7 +32,8 @@ q = pi: the band edges are exact.
 
 The strikers (the leading balls that move, ``chainrun.solver.model.strikers``) and the
 contacts that touch them are left out: the spectrum is that of the rest of the line, at
-rest (velocities are not part of the static state).
+rest (velocities are not part of the static state). Damping is left out too: the modes
+are those of the elastic line.
 """
 
 from __future__ import annotations
@@ -130,8 +131,9 @@ def static_state(line: Line, units: str = "paper") -> StaticState:
     n = line.n
     k = strikers(line)
     if k >= n:
-        raise ChainrunError("chain.velocity: every ball moves; the spectrum is of the balls "
-                            "at rest after the strikers, and there are none")
+        raise ChainrunError("chain.k: every ball is a striker (or moves, by chain.velocity); "
+                            "the spectrum is of the balls at rest after the strikers, and "
+                            "there are none")
     x = np.asarray(line.position, dtype=float)
     # contact c = 0..N joins ball c and ball c+1 (1-based; ball 0 and N+1 the walls)
     kappa = np.zeros(n + 1)
@@ -346,6 +348,7 @@ def line_spectrum(line: Line, units: str = "paper", *, period: int | None = None
     period : int, optional
         Balls per unit cell for the dispersion relation: None finds it (the smallest
         cell the masses and linear stiffnesses repeat, at least twice), 0 leaves it out.
+        A cell with a contact of no stiffness has no dispersion relation.
 
     Returns
     -------
@@ -403,6 +406,13 @@ def line_spectrum(line: Line, units: str = "paper", *, period: int | None = None
                           {"long_name": "contact j joins balls j and j+1; 0 is the left "
                                         "wall's, N the right wall's"})}
     cell = find_period(state.mass, state.springs[1:-1], period)
+    if cell and not np.all(state.springs[1:cell + 1] > 0.0):
+        # a cell that a contact without stiffness cuts: the infinite line falls apart
+        if period is not None:
+            raise ChainrunError(f"period: a contact of the {cell}-ball cell has no linear "
+                                "stiffness (no load), so the infinite line falls apart "
+                                "and has no dispersion relation")
+        cell = 0
     if cell:
         cell_mass, cell_springs = state.mass[:cell], state.springs[1:cell + 1]
         q = np.linspace(0.0, math.pi, Q_POINTS)

@@ -26,10 +26,11 @@ def summary(ds) -> list[str]:
     units = "si" if ds.attrs.get("units") == "SI" else "paper"
     omega, f = ds["omega"].values, ds["frequency"].values
     left_out = int(ds.attrs.get("strikers_left_out", 0))
-    lines = [f"N = {ds['ball'].size} balls at rest"
+    balls = ds["ball"].size
+    lines = [f"N = {balls} ball{'s' * (balls != 1)} at rest"
              + (f" ({left_out} striker{'s' * (left_out != 1)} left out)" if left_out else "")
-             + f", {omega.size} modes: omega {_range(omega, 'angular_frequency', units)}"
-             f" (f {_range(f, 'frequency', units)})"]
+             + f", {omega.size} mode{'s' * (omega.size != 1)}: omega "
+             f"{_range(omega, 'angular_frequency', units)} (f {_range(f, 'frequency', units)})"]
     zero = int(ds.attrs.get("zero_modes", 0))
     if zero == omega.size:
         lines.append("  no contact carries a load: every mode has zero frequency (an "

@@ -34,8 +34,8 @@ def _units(ds) -> str:
 
 def _modes(axes, ds, scaled, label: str) -> None:
     mode, omega = ds["mode"].values, scaled(ds["omega"].values)
-    style = (dict(marker="o", markersize=3, linestyle="none") if mode.size <= MARKED_MODES
-             else dict(linestyle="-"))
+    style = (dict(marker="o", markersize=3, linestyle="none", clip_on=False)
+             if mode.size <= MARKED_MODES else dict(linestyle="-"))
     axes.plot(mode, omega, color=OKABE_ITO[0], gid="omega", label="normal modes", **style)
     axes.set_xlabel("mode number")
     axes.xaxis.set_major_locator(MaxNLocator(integer=True))

@@ -57,10 +57,16 @@ def test_free_pieces_have_exact_zero_modes():
 
 
 def test_an_unloaded_hertz_line_has_only_zero_frequencies():
-    ds = sp.line_spectrum(Line.make(6, k=1, alpha=1.5, right=Wall(1.0)))
+    line = Line.make(6, k=1, alpha=1.5, right=Wall(1.0))
+    ds = sp.line_spectrum(line)
     assert ds.attrs["zero_modes"] == 5 and ds.attrs["strikers_left_out"] == 1
     np.testing.assert_array_equal(ds.omega, 0.0)
     np.testing.assert_array_equal(ds.shape, np.eye(5))
+    # uniform, but its cells fall apart: no dispersion relation
+    assert ds.attrs["period"] == 0 and "dispersion" not in ds
+    with pytest.raises(ChainrunError, match="^period: a contact of the 1-ball cell has no "
+                                            "linear stiffness"):
+        sp.line_spectrum(line, period=1)
 
 
 def test_a_line_not_at_rest_is_refused_naming_the_ball():
@@ -76,7 +82,7 @@ def test_a_line_not_at_rest_is_refused_naming_the_ball():
     line = Line.make(3, k=0, stiffness=1e9, alpha=1.5, gap=[-1e-6, 0.0])
     with pytest.raises(ChainrunError, match=r"^ball 1 is not at rest .* add up to -1 N "):
         sp.line_spectrum(line, "si")
-    with pytest.raises(ChainrunError, match="^chain.velocity: every ball moves"):
+    with pytest.raises(ChainrunError, match=r"^chain.k: every ball is a striker \(or moves"):
         sp.line_spectrum(Line.make(3, k=3, alpha=1.5))
 
 
