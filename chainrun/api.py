@@ -6,8 +6,8 @@ simulate`` (validation, solver, run file) and returns what ``open_run`` reads ba
 that file, so a Dataset made here and one read from the command's file are the same.
 ``open_sweep`` reads every run of an output folder (a sweep, or an ensemble over random
 seeds) as one Dataset along a dimension ``run``.
-``spectrum`` takes what ``simulate`` takes and returns the linear spectrum of the line at rest
-(``chainrun.analysis.spectrum``), as ``chainrun spectrum`` writes it.
+``spectrum`` takes what ``simulate`` takes and returns the linear spectrum of the line
+at rest (``chainrun.analysis.spectrum``), as ``chainrun spectrum`` writes it.
 
 Dimensions: ``time`` (snapshots), ``ball`` (1..N), ``contact`` (1..N-1), ``wall`` and
 ``event`` (the contact event log). Quantities are in the run's units: SI for an

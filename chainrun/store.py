@@ -1535,6 +1535,7 @@ def read_analysis(path) -> AnalysisData:
 SPECTRUM_FORMAT = "chainrun-spectrum"
 SPECTRUM_FORMAT_VERSION = 1
 _FORMAT_VERSIONS[SPECTRUM_FORMAT] = SPECTRUM_FORMAT_VERSION
+_READABLE[SPECTRUM_FORMAT] = (SPECTRUM_FORMAT_VERSION,)
 #: Attributes h5py keeps for dimension scales, not the Dataset's.
 _SCALE_ATTRS = ("CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST", "_Netcdf4Dimid")
 
