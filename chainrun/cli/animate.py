@@ -30,19 +30,30 @@ def _ball_range(text: str | None) -> tuple[int, int] | None:
                    "first 300).")
 @click.option("--fps", type=click.IntRange(1, 120), default=20, show_default=True,
               help="Frames per second; a frame per snapshot (at most 400 frames).")
-def animate(run: Path, out: Path, balls: str | None, fps: int):
-    """Write a movie of the run file RUN: the balls as discs moving along the line,
-    coloured by their velocity, with the time, one frame per snapshot.
+@click.option("--magnify", type=float, default=None, metavar="FACTOR",
+              help="Draw displacements and gaps FACTOR times their size (default: the "
+                   "largest 1, 2 or 5 times a power of ten that shows the largest "
+                   "compression as at most a quarter of a diameter and keeps the "
+                   "magnified motion within the line's length).")
+def animate(run: Path, out: Path, balls: str | None, fps: int, magnify: float | None):
+    """Write a movie of the run file RUN: the balls moving along the line, coloured by
+    their velocity, one frame per snapshot, with the time in the run's units.
+
+    Real spheres (an SI run with diameters) are drawn to scale along the line, their
+    displacements and gaps magnified by a factor written on each frame, so that pressed
+    balls overlap by their magnified compression; walls are drawn as hatched bars. A
+    line without diameters (the paper's) is a schematic: ball n at place n, 1 wide.
 
     \b
     Examples:
       chainrun animate results/cradle/run.h5 -o cradle.gif
+      chainrun animate results/steel/run.h5 -o steel.gif --magnify 1000
       chainrun animate results/runs/fig05/run.h5 -o wave.mp4 --balls 1:60
     """
     from chainrun.plotting.animate import animate_run
 
     try:
-        path = animate_run(run, out, balls=_ball_range(balls), fps=fps)
+        path = animate_run(run, out, balls=_ball_range(balls), fps=fps, magnify=magnify)
     except ChainrunError as exc:
         fail(str(exc))
     click.echo(f"{run}: {path}")

@@ -1,30 +1,81 @@
 """``chainrun animate``: a GIF with a frame per snapshot, made without external programs;
-MP4 without ffmpeg is refused in one line."""
+balls drawn at their places plus their magnified displacements (checked against the
+file read with h5py), walls, the magnification and the time with its unit on the
+frame; what cannot be made is refused in one line."""
 
 from __future__ import annotations
 
+import re
 import shutil
 
+import h5py
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from helpers import simulate_text
+from matplotlib.text import Text
 from PIL import Image
 
 from chainrun.cli import main
+from chainrun.plotting import style
+from chainrun.plotting.animate import movie_figure
+from chainrun.store import read_run
 
 CONFIG = """name = "movie"
 [chain]
 n = 8
 k = 1
 alpha = 1.0
+[walls.right]
+stiffness = 1.0
 [output]
 times = {start = 0, stop = 12, step = 0.5}
+"""
+
+#: six 8 mm steel beads 2 µm apart, the last 1 µm from a steel wall, struck at 0.3 m/s
+STEEL = """name = "beads"
+units = "si"
+[chain]
+n = 6
+k = 1
+speed = 0.3
+diameter = 0.008
+material = "steel"
+gap = 2.0e-6
+[walls.right]
+material = "steel"
+gap = 1.0e-6
+[output]
+times = {start = 0.0, stop = 1.2e-4, step = 4.0e-6}
+[solver]
+t_end = 1.2e-4
 """
 
 
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory):
     return simulate_text(tmp_path_factory.mktemp("animate"), CONFIG) / "run.h5"
+
+
+@pytest.fixture(scope="module")
+def steel_file(tmp_path_factory):
+    return simulate_text(tmp_path_factory.mktemp("animate-si"), STEEL) / "run.h5"
+
+
+def _movie(path, magnify=None):
+    """The movie's figure, its artists by gid, and the balls' drawn centres and the time
+    text at every frame."""
+    run = read_run(path)
+    frames = np.arange(run.times.size)
+    with style():
+        figure, draw = movie_figure(run, frames, 1, run.n, magnify=magnify)
+    artists = {a.get_gid(): a for a in figure.findobj() if a.get_gid()}
+    centres, clock = [], []
+    for i in frames:
+        balls, time = draw(i)
+        centres.append(balls.get_offsets()[:, 0].copy())
+        clock.append(time.get_text())
+    return figure, artists, np.array(centres), clock
 
 
 def test_a_gif_has_a_frame_per_snapshot(run_file, tmp_path):
@@ -41,11 +92,88 @@ def test_a_gif_has_a_frame_per_snapshot(run_file, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["movie.gif"]  # no temporary left
 
 
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="needs the ffmpeg program")
+def test_an_mp4_is_made_by_ffmpeg(run_file, tmp_path):
+    out = tmp_path / "movie.mp4"
+    result = CliRunner().invoke(main, ["animate", str(run_file), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes()[4:8] == b"ftyp"  # an ISO media file
+    assert [p.name for p in tmp_path.iterdir()] == ["movie.mp4"]
+
+
+def test_real_beads_are_drawn_to_scale_with_magnified_motion(steel_file):
+    with h5py.File(steel_file) as h5:
+        d = h5["model/diameter"][()]
+        gap = h5["model/gap"][()]
+        wall_gap = h5["model/walls/right"].attrs["gap"]
+        x = h5["particles/chain/position/value"][:, :, 0]
+        t = h5["particles/chain/position/time"][()]
+    figure, artists, centres, clock = _movie(steel_file, magnify=1000)
+    mm = 1e3
+    rest = np.cumsum(d) - d / 2  # ball 1's left side at 0
+    before = np.concatenate([[0.0], np.cumsum(gap)])
+    assert np.allclose(centres, mm * (rest + 1000 * (before + x)), rtol=0, atol=1e-9)
+    assert np.allclose(artists["balls"].get_widths(), mm * d)
+    wall = artists["wall/right"]
+    assert wall.get_x() == pytest.approx(mm * (d.sum() + 1000 * (gap.sum() + wall_gap)))
+    assert "wall/left" not in artists
+    assert artists["magnification"].get_text() == "displacements and gaps × 1000"
+    # the time in microseconds, as the file has it
+    for text, seconds in zip(clock, t):
+        number, unit = re.fullmatch(r"t = ([0-9.]+) (µs)", text).groups()
+        assert float(number) == pytest.approx(seconds * 1e6, abs=0.5)
+    texts = [a.get_text() for a in figure.findobj(Text)]
+    assert not [s for s in texts if "paper units" in s]
+    axes = figure.axes[0]
+    assert axes.get_xlabel() == "position along the line (mm)"
+    assert "velocity (mm/s)" in texts  # the striker's 0.3 m/s is the largest speed
+    assert any("N = 6" in s and "steel" in s and "d = 8 mm" in s for s in texts)
+    left, right = axes.get_xlim()
+    assert left < centres.min() - mm * d[0] / 2 and right > wall.get_x()
+
+
+def test_the_automatic_magnification_shows_the_compression(steel_file):
+    with h5py.File(steel_file) as h5:
+        d = h5["model/diameter"][()]
+        gap = h5["model/gap"][()]
+        wall_gap = h5["model/walls/right"].attrs["gap"]
+        x = h5["particles/chain/position/value"][:, :, 0]
+    # largest compression of a contact or the wall; motion of the balls and the wall
+    squeeze = max((x[:, :-1] - x[:, 1:] - gap).max(), (x[:, -1] - wall_gap).max())
+    before = np.concatenate([[0.0], np.cumsum(gap)])
+    motion = np.append((before + x).ravel(), gap.sum() + wall_gap)
+    fits = [m * 10.0 ** p for p in range(-3, 8) for m in (1, 2, 5)
+            if m * 10.0 ** p * squeeze <= 0.25 * d.min()
+            and m * 10.0 ** p * np.ptp(motion) <= d.sum()]
+    _, artists, centres, _ = _movie(steel_file)
+    stated = artists["magnification"].get_text()
+    factor = float(stated.rpartition("× ")[2])
+    assert factor == pytest.approx(max(fits))
+    # pressed balls overlap by the magnified compression, a visible share of a diameter
+    overlap = ((d[:-1] + d[1:]) / 2 * 1e3 - np.diff(centres, axis=1)).max()
+    assert overlap == pytest.approx(factor * (x[:, :-1] - x[:, 1:] - gap).max() * 1e3)
+    assert 0.1 * d.min() * 1e3 < overlap <= 0.25 * d.min() * 1e3
+
+
+def test_a_line_in_paper_units_is_a_schematic(run_file):
+    with h5py.File(run_file) as h5:
+        x = h5["particles/chain/position/value"][:, :, 0]
+        wall_gap = h5["model/walls/right"].attrs["gap"]
+    figure, artists, centres, clock = _movie(run_file, magnify=0.5)
+    assert np.allclose(centres, np.arange(1, 9) + 0.5 * x, rtol=0, atol=1e-12)
+    assert artists["wall/right"].get_x() == pytest.approx(8.5 + 0.5 * wall_gap)
+    assert artists["magnification"].get_text() == "displacements × 0.5"
+    assert clock[1] == "t = 0.5 (paper units)"
+    assert "schematic" in figure.axes[0].get_xlabel()
+
+
 def test_what_cannot_be_made_is_refused_in_one_line(run_file, tmp_path, monkeypatch):
     runner = CliRunner()
     cases = [(["-o", str(tmp_path / "m.avi")], "a movie is .gif or .mp4"),
              (["-o", str(tmp_path / "m.gif"), "--balls", "3:99"], "not within 1:8"),
-             (["-o", str(tmp_path / "m.gif"), "--balls", "three"], "expected FIRST:LAST")]
+             (["-o", str(tmp_path / "m.gif"), "--balls", "three"], "expected FIRST:LAST"),
+             (["-o", str(tmp_path / "m.gif"), "--magnify", "0"], "magnify 0.0: must be"),
+             (["-o", str(tmp_path / "m.gif"), "--magnify", "nan"], "magnify nan: must be")]
     monkeypatch.setattr(shutil, "which", lambda name: None)
     cases.append((["-o", str(tmp_path / "m.mp4")], "MP4 needs the ffmpeg program"))
     for args, message in cases:
