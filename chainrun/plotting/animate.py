@@ -44,8 +44,8 @@ MAX_BALLS = 300
 #: size of a frame: 800 x 240 pixels
 FIGSIZE = (8.0, 2.4)
 DPI = 100
-#: characters of the title on one line (a longer one takes two)
-TITLE_WIDTH = 90
+#: characters of a line of the title
+TITLE_WIDTH = 110
 #: the colours of velocity, red forward and blue backward
 CMAP = "RdBu_r"
 #: the automatic magnification draws the largest compression as this fraction of the
@@ -120,42 +120,37 @@ class Picture:
 def _picture(run, frames: np.ndarray, first: int, last: int) -> Picture:
     """Where balls ``first``..``last`` (1-based, inclusive) and the walls next to them
     are drawn in ``frames`` (snapshot indices) of ``run`` (``chainrun.store.RunData``)."""
-    model = run.model or {}
-    units = model.get("units", "paper")
-    n = run.n
+    line, units, n = run.line, run.units, run.n
     cols = slice(first - 1, last)
     x = np.asarray(run.positions[:, cols])[frames]
-    gap = np.asarray(model.get("gap", np.zeros(n - 1)), dtype=float)
+    gap = np.asarray(line.gap, dtype=float)
     before = np.concatenate([[0.0], np.cumsum(gap)])  # gaps before each ball, (N,)
-    walls = model.get("walls", {}) or {}
-    diameter = model.get("diameter")
-    if diameter is not None:
-        diameter = np.asarray(diameter, dtype=float)
+    if line.diameter is not None:
+        diameter = np.asarray(line.diameter, dtype=float)
         rest = np.cumsum(diameter) - diameter / 2.0  # ball 1's left side at 0
         length = scale_for("position", units, [rest[-1] + diameter[-1] / 2.0])
         place, width = length(rest), length(diameter)
     else:
         # a schematic: ball n at n, one paper unit of length wide (in SI, the line's
-        # own paper unit: its model/scales length)
-        unit = float(model["scales"]["length"]) if units == "si" else 1.0
+        # own paper unit, model/scales@length)
+        unit = float(run.model["scales"]["length"]) if units == "si" else 1.0
         length = Scaled(1.0 / unit, "")
         place, width = np.arange(1.0, n + 1.0), np.ones(n)
 
     # compressions of the contacts between the balls shown and of the walls beside them
     squeeze = [x[:, :-1] - x[:, 1:] - gap[first - 1:last - 1]]
     drawn = {}
-    if "left" in walls and first == 1:
-        g = float(walls["left"]["gap"])
-        squeeze.append(-x[:, :1] - g)
-        drawn["left"] = (float(place[0] - width[0] / 2.0), -g)
-    if "right" in walls and last == n:
-        g = float(walls["right"]["gap"])
-        squeeze.append(x[:, -1:] - g)
-        drawn["right"] = (float(place[-1] + width[-1] / 2.0), float(before[-1]) + g)
-    compression = max((float(np.max(s, initial=0.0)) for s in squeeze), default=0.0)
+    if line.left is not None and first == 1:
+        squeeze.append(-x[:, :1] - line.left.gap)
+        drawn["left"] = (float(place[0] - width[0] / 2.0), -line.left.gap)
+    if line.right is not None and last == n:
+        squeeze.append(x[:, -1:] - line.right.gap)
+        drawn["right"] = (float(place[-1] + width[-1] / 2.0),
+                          float(before[-1]) + line.right.gap)
+    compression = max(float(np.max(s, initial=0.0)) for s in squeeze)
     return Picture(length=length, place=place[cols], width=width[cols],
                    motion=before[cols] + x, walls=drawn, compression=compression,
-                   to_scale=diameter is not None)
+                   to_scale=line.diameter is not None)
 
 
 def _frames(run) -> np.ndarray:
@@ -166,33 +161,17 @@ def _frames(run) -> np.ndarray:
     return np.arange(0, run.times.size, stride)
 
 
-def _title(run, units: str, first: int, last: int) -> str:
-    """What the line is: experiment (and swept values), N (and the balls shown), K, and
-    its spheres in SI."""
-    p = run.parameters
-    name = p.get("experiment", "") or "run"
-    overrides = p.get("overrides") or {}
-    if overrides:
-        name += " (" + ", ".join(f"{k} = {v}" for k, v in overrides.items()) + ")"
-    shown = f" (balls {first} to {last} shown)" if (first, last) != (1, run.n) else ""
-    parts = [f"N = {run.n}{shown}", f"K = {run.k}"]
-    model = run.model or {}
-    if model.get("diameter") is None:
-        parts.append(f"α = {run.alpha:g}")
-    names = [m for m in np.unique(model["material"]) if m] if model.get("material") \
-        is not None else []
-    if names:
-        parts.append(" and ".join(m.replace("_", " ") for m in names))
-    if model.get("diameter") is not None:
-        d = np.asarray(model["diameter"], dtype=float)
-        low, high = float(d.min()), float(d.max())
-        parts.append("d = " + (format_value(low, "diameter", units) if low == high else
-                               f"{format_value(low, 'diameter', units)} to "
-                               f"{format_value(high, 'diameter', units)}"))
-    if model.get("scales") and units == "si":
-        parts.append("V = " + format_value(model["scales"]["velocity"], "velocity", units))
-    text = ", ".join(parts)
-    return f"{name}:\n{text}" if len(name) + len(text) > TITLE_WIDTH else f"{name}: {text}"
+def _title(run, first: int, last: int) -> str:
+    """The experiment (and run) name, the balls shown if not all, over what the line
+    is (``views.describe``)."""
+    from chainrun.plotting.views import describe
+
+    run_id = run.parameters.get("run_id", "")
+    name = run.parameters.get("experiment", "") + (
+        f" ({run_id})" if run_id and run_id != "run" else "")
+    if (first, last) != (1, run.n):
+        name += f", balls {first} to {last} shown"
+    return "\n".join([name] * bool(name) + [describe(run, width=TITLE_WIDTH)])
 
 
 def _clock(times: np.ndarray, units: str) -> list[str]:
@@ -281,8 +260,7 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    model = run.model or {}
-    units = model.get("units", "paper")
+    units = run.units
     shown = _picture(run, frames, first, last)
     magnify = shown.auto_magnify() if magnify is None else float(magnify)
     centres = shown.centres(magnify)
@@ -322,12 +300,12 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
         one = ("lengths in " + PAPER if units != "si" else
                "1 = " + format_value(1.0 / shown.length.factor, "position", units))
         axes.set_xlabel(f"ball (schematic: ball n at n, 1 wide; {one})")
-    gaps = np.any(model.get("gap", 0.0)) or any(g for _, g in shown.walls.values())
+    gaps = np.any(run.line.gap) or any(g for _, g in shown.walls.values())
     stated = "displacements" + (" and gaps" if gaps else "") + f" × {magnify:g}"
     axes.set_title(stated, loc="right", fontsize="medium").set_gid("magnification")
     time = axes.set_title(clock[-1], loc="left", fontsize="medium")
     time.set_gid("time")
-    figure.suptitle(_title(run, units, first, last), fontsize="medium")
+    figure.suptitle(_title(run, first, last), fontsize="medium")
     figure.colorbar(discs, ax=axes, label=v_label, fraction=0.03)
     # lay the figure out once, then widen the box to the axes' shape at equal scales
     FigureCanvasAgg(figure).draw()
