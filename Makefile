@@ -18,12 +18,15 @@ help:
 # The packages install with uv, which fetches them side by side (about 5 s from nothing,
 # against 26 s for pip alone); where uv cannot be installed, pip does it. VENV_MADE
 # makes the environment and gets its installer; INSTALLER sets the shell's $install to
-# the command that installs (each recipe line is a shell of its own).
+# the command that installs (each recipe line is a shell of its own). Both write the
+# packages' bytecode as they install (pip does by default, uv when asked): a process
+# that finds none compiles every module it imports, and where PYTHONDONTWRITEBYTECODE
+# is set it does so again in every process (about 1 s of CPU for `chainrun simulate`).
 VENV_MADE = test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
 	  $(BIN)/python -m pip install --quiet uv || $(BIN)/python -m pip install --quiet --upgrade pip
 INSTALLER = install="$(BIN)/python -m pip install --quiet"; \
 	  if $(BIN)/python -m uv --version > /dev/null 2>&1; then \
-	    install="$(BIN)/python -m uv pip install --quiet --python $(BIN)/python"; fi
+	    install="$(BIN)/python -m uv pip install --quiet --compile-bytecode --python $(BIN)/python"; fi
 
 # The solver is compiled for this machine once, here, into its cache (about 75 s on two
 # cores): a first `chainrun simulate` then starts at once. The compiler keeps one core
@@ -33,6 +36,7 @@ $(STAMP): pyproject.toml
 	$(VENV_MADE)
 	$(INSTALLER); \
 	  $$install -e . || exit 1; \
+	  $(BIN)/python -m compileall -q chainrun > /dev/null; \
 	  $(BIN)/python -c 'import chainrun.solver as s; s.load_kernels()' & compiler=$$!; \
 	  $(BIN)/python -c 'import subprocess, sys, tomllib; \
 	    test = tomllib.load(open("pyproject.toml", "rb"))["project"]["optional-dependencies"]["test"]; \
