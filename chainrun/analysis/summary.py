@@ -2,9 +2,10 @@
 
 Read from a run file only (``chainrun.store.RunData``), from its own line (masses,
 contacts, walls, forces and damping; ``RunData.line``), in its own units. A ball
-*rebounds* when its final velocity is negative, is *ejected* when it moves forward
-faster than ``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed), and
-is *left behind* otherwise. Energies are shares of the impact energy
+*rebounds* when its final velocity is negative (beyond the solver's velocity floor,
+below which a velocity is rounding), is *ejected* when it moves forward faster than
+``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed), and is *left
+behind* otherwise. Energies are shares of the impact energy
 (``chainrun.solver.physics.impact_energy``: K/2 on the paper's line): the kinetic
 energy of the rebounding, ejected and left-behind balls at the end, the energy still
 in the contacts and walls (above the static state a precompressed line starts in,
@@ -156,7 +157,11 @@ def summarize(run) -> RunSummary:
     line = run.line
     v = np.asarray(run.final_velocity, dtype=float)
     speed = float(np.max(np.abs(line.velocity))) if line.n else 0.0
-    back, ahead = v < 0.0, v > SIGNIFICANT * (speed or 1.0)
+    # a velocity within the solver's floor is rounding (a line left at rest), not a
+    # rebound: the floor is relative to the line's velocity scale
+    scales = (run.model or {}).get("scales") or {}
+    floor = float(run.parameters.get("velocity_floor", 0.0)) * scales.get("velocity", 1.0)
+    back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
     impact = impact_energy(line)
     stored = float(line_potential_energy(run.final_position, line)) - baseline_energy(line)
