@@ -1564,7 +1564,7 @@ def _sensor_problems(output: "Output", t_end: float | None) -> list[_Problem]:
     if samples > MAX_SENSOR_SAMPLES:
         where = "output.sensor_end" if output.sensor_end is not None else (
             "solver.t_end" if t_end is not None else "output.times")
-        return [_Problem("output.sensor_dt", f"{len(output.sensors)} sensors every "
+        return [_Problem("output.sensor_dt", f"{len(output.sensors)} sensor{'s' * (len(output.sensors) != 1)} every "
                          f"{output.sensor_dt:g} up to {end:g} ({where}) take "
                          f"{samples:.3g} samples, too many (at most {MAX_SENSOR_SAMPLES:.0e}); "
                          "sample less often, or stop sooner with output.sensor_end",

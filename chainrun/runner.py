@@ -82,13 +82,17 @@ class RunSummary:
     final_velocity: np.ndarray
     skipped: bool = False
     dissipated: float = 0.0  # share of the impact energy the damping took
+    units: str = "paper"  # the run's units: "paper" or "si"
 
     def line(self) -> str:
         """One line: how the run ended, its cost and its conservation errors."""
+        from chainrun.units import format_value
+
+        end = format_value(self.end_time, "time", self.units, 6)
         if self.terminal:
-            how = f"terminal at t = {self.end_time:.6g}"
+            how = f"terminal at t = {end}"
         elif self.outcome == "stop_time":
-            how = f"stopped at t_end = {self.end_time:.6g}"
+            how = f"stopped at t_end = {end}"
         else:
             how = self.message
         text = (f"{how}, {self.events} events, {self.steps} steps, "
@@ -219,7 +223,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         momentum_error=d.momentum_error, energy_error=d.energy_error,
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
-        dissipated=_share(sol.dissipated_energy, line),
+        dissipated=_share(sol.dissipated_energy, line), units=spec.units,
     )
 
 
@@ -250,7 +254,7 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
-        dissipated=_share(run.dissipated_energy, run.line),
+        dissipated=_share(run.dissipated_energy, run.line), units=run.units,
     )
 
 
@@ -625,17 +629,20 @@ def simulate_experiment(
             f"{shown} holds run files of another config or of no chainrun run "
             f"({names}{more}); use --force to replace them"
         )
+    warnings = []
+    if scheduler is None and scheduler_file is None and executor is None:
+        # refused before anything is made; on a cluster each worker checks its own
+        # memory (simulate_run)
+        warnings = check_runs(plan.todo, outdir, runs_at_once=jobs or 1)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ChainrunError(f"cannot create output folder {shown}: {exc.strerror}") from None
     if not os.access(outdir, os.W_OK):
         raise ChainrunError(f"output folder {shown} is not writable")
-    if scheduler is None and scheduler_file is None and executor is None:
-        # on a cluster each worker checks its own memory (simulate_run)
-        for warning in check_runs(plan.todo, outdir, runs_at_once=jobs or 1):
-            if on_warning is not None:
-                on_warning(warning)
+    for warning in warnings:
+        if on_warning is not None:
+            on_warning(warning)
 
     results: dict[str, RunSummary | RunError] = {}
     counts = SweepProgress(total=len(specs))
@@ -749,14 +756,24 @@ def _describe(exc: BaseException) -> str:
 
 
 def velocity_table(summaries: list[RunSummary], max_balls: int = 20) -> str | None:
-    """Final velocities as a text table (balls down, runs across), for short lines."""
-    if not summaries or any(s.n != summaries[0].n for s in summaries):
+    """The velocities where the runs ended as a text table (balls down, runs across),
+    under a heading with their unit, for short lines: final velocities where every
+    run reached its terminal state."""
+    from chainrun.units import scale_for
+
+    if (not summaries or any(s.n != summaries[0].n for s in summaries)
+            or len({s.units for s in summaries}) > 1):
         return None
     n = summaries[0].n
     if n > max_balls:
         return None
+    scaled = scale_for("velocity", summaries[0].units,
+                       np.concatenate([s.final_velocity for s in summaries]))
+    what = ("final velocities" if all(s.terminal for s in summaries)
+            else "velocities where the runs stopped")
     head = ["n"] + [s.run_id for s in summaries]
-    rows = [[str(i + 1)] + [f"{s.final_velocity[i]:.4f}" for s in summaries] for i in range(n)]
+    rows = [[str(i + 1)] + [f"{scaled(s.final_velocity[i]):.4f}" for s in summaries]
+            for i in range(n)]
     widths = [max(len(r[c]) for r in [head] + rows) for c in range(len(head))]
     fmt = lambda r: "  ".join(v.rjust(w) for v, w in zip(r, widths))
-    return "\n".join([fmt(head)] + [fmt(r) for r in rows])
+    return "\n".join([f"{what} ({scaled.unit})", fmt(head)] + [fmt(r) for r in rows])

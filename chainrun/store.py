@@ -360,6 +360,9 @@ def _open_read(name: str) -> h5py.File:
     except OSError as exc:
         if not os.access(name, os.R_OK):
             raise StoreError(f"{name}: cannot read (permission denied)") from exc
+        if os.path.splitext(name)[1].lower() in (".toml", ".yaml", ".yml"):
+            raise StoreError(f"{name}: an experiment file, not a run file (run `chainrun "
+                             f"simulate {name}` to make its runs)") from exc
         raise StoreError(f"{name}: truncated or not HDF5") from exc
 
 
@@ -980,6 +983,18 @@ class RunData:
         return Line(**{key: model[key] for key in (
             "mass", "stiffness", "alpha", "gap", "velocity", "force", "position",
             "damping", "damping_exponent", "diameter", "material")}, **walls)
+
+    @property
+    def impact_energy(self) -> float:
+        """The energy the impact put into the line (``physics.impact_energy``)."""
+        return physics.impact_energy(self.line)
+
+    @property
+    def baseline_energy(self) -> float:
+        """The potential energy of the static state the line started in (0 unless it
+        started precompressed; ``physics.baseline_energy``): the observables'
+        ``potential_energy`` less this is the energy the impact left in the contacts."""
+        return physics.baseline_energy(self.line)
 
     @property
     def units(self) -> str:

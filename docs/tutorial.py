@@ -92,7 +92,7 @@ beads = chainrun.simulate(
     solver={"t_end": 4.0e-4},
 )
 # The line is in the Dataset, per ball and per contact, with its units.
-print(f"beads: {beads.mass.values[0] * 1e3:.5f} g each ({beads.mass.attrs['units']}), "
+print(f"beads: {beads.mass.values[0] * 1e3:.5f} g each (stored in {beads.mass.attrs['units']}), "
       f"contact stiffness {beads.stiffness.values[0]:.4g} {beads.stiffness.attrs['units']}")
 # What the sensors recorded, measured: at each, the first pulse's peak contact force,
 # its time, width and arrival, and the wave's speed fitted through the peak times
@@ -129,7 +129,7 @@ CliRunner().invoke(main, ["simulate", str(ensemble), "-o", str(out / "disorder")
                    catch_exceptions=False)
 runs = chainrun.open_sweep(out / "disorder")
 mean = runs.final_velocity.mean("run")
-spread = runs.final_velocity.std("run")
+spread = runs.final_velocity.std("run", ddof=1)  # the sample standard deviation
 print(f"ensemble: {runs.sizes['run']} runs; ball 1 rebounds at {mean.sel(ball=1).item():.3f} "
       f"+- {spread.sel(ball=1).item():.3f}, the last leaves at {mean.isel(ball=-1).item():.3f} "
       f"+- {spread.isel(ball=-1).item():.3f}")

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from chainrun.errors import ChainrunError
-from chainrun.solver.physics import baseline_energy, impact_energy
 
 __all__ = ["Ensemble", "ensemble", "is_ensemble"]
 
@@ -33,7 +32,8 @@ class Ensemble:
     largest final velocity of each ball, shape (N,) each. ``energy_left`` is, for each
     run at each snapshot time ``times``, the share of its impact energy still in the
     line (kinetic and contact energy; the rest was dissipated), shape (R, T); None
-    when the runs' snapshot times differ or are fewer than two.
+    when no run dissipated (all of it stays), or the runs' snapshot times differ or
+    are fewer than two.
     """
 
     runs: int
@@ -57,9 +57,9 @@ def ensemble(runs) -> Ensemble:
     final = {"mean": finals.mean(axis=0), "sd": finals.std(axis=0, ddof=1),
              "min": finals.min(axis=0), "max": finals.max(axis=0)}
     times = runs[0].times
-    if times.size < 2 or not all(np.array_equal(run.times, times) for run in runs):
+    if (times.size < 2 or not all(np.array_equal(run.times, times) for run in runs)
+            or not any(run.dissipated_energy > 0.0 for run in runs)):
         return Ensemble(len(runs), runs[0].units, final, None, None)
     left = np.array([(run.observables["kinetic_energy"] + run.observables["potential_energy"]
-                      - baseline_energy(run.line)) / impact_energy(run.line)
-                     for run in runs])
+                      - run.baseline_energy) / run.impact_energy for run in runs])
     return Ensemble(len(runs), runs[0].units, final, times, left)

@@ -24,12 +24,7 @@ import numpy as np
 from chainrun.analysis.derived import SIGNIFICANT
 from chainrun.solver import EventKind
 from chainrun.solver.model import strikers
-from chainrun.solver.physics import (
-    baseline_energy,
-    impact_energy,
-    line_kinetic_energy,
-    line_potential_energy,
-)
+from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
 
 __all__ = ["RunSummary", "describe_line", "law_name", "summarize"]
 
@@ -142,11 +137,18 @@ def describe_line(line, units: str) -> str:
         parts.append(f"forces on {int(np.count_nonzero(line.force))} balls, "
                      f"{_span(line.force[line.force != 0], quantity('force'))}")
     if np.any(line.damping):
-        parts.append(f"damping {_span(line.damping, lambda x: f'{x:.4g}')} "
-                     f"(exponent {_span(line.damping_exponent, lambda x: f'{x:g}')})")
-    walls = [f"{side} (stiffness {w.stiffness:.4g}, alpha {w.alpha:g}"
+        beta = _span(line.damping_exponent, lambda x: f"{x:g}")
+        parts.append(f"damping {_span(line.damping, lambda x: f'{x:.4g}')}"
+                     + (f" N s/m^{1 + float(line.damping_exponent[0]):g}"
+                        if units == "si" and " " not in beta else "")
+                     + f" (exponent {beta})")
+    walls = [f"{side} (stiffness {w.stiffness:.4g}" + (f" N/m^{w.alpha:g}" if units == "si"
+                                                          else "")
+             + f", alpha {w.alpha:g}"
              + (f", gap {format_value(w.gap, 'gap', units)}" if w.gap else "")
-             + (f", damping {w.damping:.4g}" if w.damping else "") + ")"
+             + (f", damping {w.damping:.4g}" + (f" N s/m^{1 + w.damping_exponent:g}"
+                                                 if units == "si" else "")
+                + f" (exponent {w.damping_exponent:g})" if w.damping else "") + ")"
              for side, w in (("left", line.left), ("right", line.right)) if w is not None]
     parts.append("walls: " + (", ".join(walls) if walls else "none"))
     return "; ".join(parts)
@@ -163,8 +165,8 @@ def summarize(run) -> RunSummary:
     floor = float(run.parameters.get("velocity_floor", 0.0)) * scales.get("velocity", 1.0)
     back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
-    impact = impact_energy(line)
-    stored = float(line_potential_energy(run.final_position, line)) - baseline_energy(line)
+    impact = run.impact_energy
+    stored = float(line_potential_energy(run.final_position, line)) - run.baseline_energy
     amounts = {name: float(line_kinetic_energy(np.where(mask, v, 0.0), line.mass))
                for name, mask in (("rebound", back), ("ejected", ahead),
                                   ("left behind", behind))}

@@ -33,13 +33,37 @@ def _ball(which: str, pick, s) -> str:
 
 
 def _shares(s) -> str:
+    """The energy line: the shares of the impact energy where the run ended; at its
+    terminal state by the balls' fate, else (stopped mid-way) kinetic as one."""
     from chainrun.units import format_value
 
     if not math.isfinite(s.energy["rebound"]):
         return "no impact energy to share (the line starts at rest)"
-    shares = ", ".join(f"{_SHARE_NAMES[name]} {share:.2%}" for name, share in s.energy.items()
+    energy = dict(s.energy)
+    if not s.terminal:
+        energy = {"kinetic": energy.pop("rebound") + energy.pop("ejected")
+                  + energy.pop("left behind"), **energy}
+    names = {**_SHARE_NAMES, "kinetic": "kinetic"}
+    shares = ", ".join(f"{names[name]} {share:.2%}" for name, share in energy.items()
                        if name != "dissipated" or share)
-    return f"of the impact energy {format_value(s.impact, 'energy', s.units)}: {shares}"
+    when = "" if s.terminal else f" at t = {format_value(s.end_time, 'time', s.units, 6)}"
+    return f"of the impact energy {format_value(s.impact, 'energy', s.units)}{when}: {shares}"
+
+
+def _balls(s, threshold: str) -> list[str]:
+    """The balls' lines: the largest velocities and, at the terminal state, how many
+    balls rebound, are ejected or are left behind (a run stopped before it has no
+    final velocities to sort them by)."""
+    from chainrun.units import format_value
+
+    moving = (f"largest forward velocity: {_ball('forward', s.forward, s)}; "
+              f"largest backward velocity: {_ball('backward', s.backward, s)}")
+    if not s.terminal:
+        return [f"balls     at t = {format_value(s.end_time, 'time', s.units, 6)}, before "
+                f"the terminal state: {moving}"]
+    return [f"balls     {moving}",
+            f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 1% of the "
+            f"impact speed, {threshold}), {s.left_behind} left behind"]
 
 
 def _pulse_lines(p) -> list[str]:
@@ -114,20 +138,18 @@ def render(s, pulses=None) -> str:
         *([f"line      {s.line}"] if s.line else []),
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "
-        f"at most {s.max_window} balls integrated at once, {s.wall_time:.2f} s",
+        f"at most {min(s.max_window, s.n)} balls integrated at once, {s.wall_time:.2f} s",
         *([f"          {s.closed_form} isolated collisions taken whole"]
           if s.closed_form else []),
         f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
-        f"balls     largest forward velocity: {_ball('forward', s.forward, s)}; "
-        f"largest backward velocity: {_ball('backward', s.backward, s)}",
-        f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 1% of the "
-        f"impact speed, {threshold}), {s.left_behind} left behind",
+        *_balls(s, threshold),
         f"energy    {_shares(s)}",
         *damping,
         *(_pulse_lines(pulses) if pulses is not None else []),
         f"stored    {stored}; the event log; final and separation velocities"
-        + (f"; forces on {s.sensors} sensor balls at {s.samples} samples" if s.sensors else ""),
+        + (f"; forces on {s.sensors} sensor ball{'s' * (s.sensors != 1)} at {s.samples} "
+           "samples" if s.sensors else ""),
     ]
     return "\n".join(lines)
 
@@ -148,9 +170,10 @@ _ENSEMBLE = (
 )
 
 
-def render_folder(path: Path, summaries) -> str:
-    """An output folder of several runs: a line per run, then the mean and standard
-    deviation of each summary number over the runs (an ensemble's statistics)."""
+def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
+    """An output folder of several runs: a line per run, and for an ``ensemble`` (one
+    line over random seeds) the mean and sample standard deviation of each summary
+    number over the runs."""
     from chainrun.units import scale_for
 
     units = summaries[0].units
@@ -165,9 +188,9 @@ def render_folder(path: Path, summaries) -> str:
         lines.append(f"{Path(s.path).name:<24} {s.n:>7} {s.k:>4} {s.outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
                      f"{speed(forward):>16.6g}")
-    if len({s.units for s in summaries}) > 1:
-        return "\n".join(lines + ["(runs in different units: no statistics)"])
-    lines += ["", f"over the {len(summaries)} runs: mean +- standard deviation "
+    if not ensemble:
+        return "\n".join(lines)
+    lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
                   "(min ... max)"]
     for label, quantity, value in _ENSEMBLE:
         x = np.array([value(s) for s in summaries], dtype=float)
@@ -207,14 +230,15 @@ def info(paths: tuple[Path, ...]):
     time, the pulse's width and arrival at each sensor, and the wave's speed fitted
     through them), and what the file stores. For an output folder (a sweep or an
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
-    deviation and range of each number over the runs; the full summary when the
-    folder holds a single run.
+    deviation and range of each number over the runs when they are an ensemble (the
+    same line over random seeds); the full summary when the folder holds a single run.
 
     \b
     Examples:
       chainrun info results/cradle/run.h5
       chainrun info results/table1
     """
+    from chainrun.analysis.ensemble import is_ensemble
     from chainrun.analysis.summary import summarize
     from chainrun.runner import INDEX_NAME
     from chainrun.store import read_index, read_run
@@ -233,7 +257,8 @@ def info(paths: tuple[Path, ...]):
                     run = read_run(path / str(rows[0]["file"]))
                     click.echo(render(summaries[0], _pulses(run)))
                 else:
-                    click.echo(render_folder(path, summaries))
+                    runs = [read_run(path / str(r["file"])) for r in rows]
+                    click.echo(render_folder(path, summaries, is_ensemble(runs)))
             else:
                 run = read_run(path)
                 click.echo(render(summarize(run), _pulses(run)))

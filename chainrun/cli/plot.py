@@ -121,6 +121,9 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
             except ChainrunError as exc:
                 fail(str(exc))
         return
+    for name in names:
+        if name not in known and (name.endswith(".h5") or "/" in name) and not Path(name).exists():
+            fail(f"{name}: no such file or folder")
     if all_:
         names = tuple(a.name for a in artefacts.ARTEFACTS if a.plot is not None)
     if not names:

@@ -132,8 +132,7 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
              EXIT_INTERRUPTED)
     table = velocity_table(result.summaries)
     if table:
-        click.echo("\nfinal velocities")
-        click.echo(table)
+        click.echo("\n" + table)
     for run in result.failures:
         click.echo(f"chainrun: run {run.run_id} failed: {run.message}", err=True)
     computed = [r for r in result.computed if r.ok]

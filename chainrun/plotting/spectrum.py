@@ -53,9 +53,16 @@ def _bands(axes, ds, scaled) -> None:
             axes.axhspan(top[b], bottom[b + 1], gid=f"gap/{b + 1}", **_GAP)
 
 
+def _name(ds) -> str:
+    """The experiment and run a spectrum is of, from its attributes ("" if unknown)."""
+    experiment, run_id = ds.attrs.get("experiment", ""), ds.attrs.get("run_id", "")
+    return experiment + (f" ({run_id})" if run_id and run_id != "run" else "")
+
+
 def draw_spectrum(ds) -> Figure:
     """The figure of spectrum Dataset ``ds``: modes, and the dispersion relation with
-    its band edges for a periodic line. Call inside ``chainrun.plotting.style()``."""
+    its band edges for a periodic line, titled by the experiment and run it is of.
+    Call inside ``chainrun.plotting.style()``."""
     units = _units(ds)
     periodic = "dispersion" in ds
     values = [ds["omega"].values] + ([ds["dispersion"].values] if periodic else [])
@@ -67,6 +74,8 @@ def draw_spectrum(ds) -> Figure:
         _modes(axes, ds, scaled, label)
         axes.set_ylim(0.0, None)
         axes.set_title(f"{ds['mode'].size} normal modes of the line at rest")
+        if _name(ds):
+            figure.suptitle(_name(ds), fontsize="medium")
         return figure
     figure = Figure(figsize=(8.4, 3.6))
     left, right = figure.subplots(1, 2, sharey=True, width_ratios=(1.4, 1.0))
@@ -92,4 +101,6 @@ def draw_spectrum(ds) -> Figure:
         handles.append(Patch(label="band gap", **_GAP))
     left.legend(handles=handles, loc="lower right", frameon=True, facecolor="white",
                 edgecolor="0.6", framealpha=1.0)
+    if _name(ds):
+        figure.suptitle(_name(ds), fontsize="medium")
     return figure

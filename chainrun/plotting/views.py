@@ -18,6 +18,8 @@ shows, so tests can match what is drawn with the file.
 
 from __future__ import annotations
 
+import difflib
+
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
@@ -62,6 +64,19 @@ _SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "
                    "restitution_speed": "velocity"}
 
 
+def _drawn(table, quantity: str, units: str) -> str | None:
+    """How a key's random values are drawn (``"uniform 1-3 kg"``), from its generator
+    table in the resolved config; None for values that are not drawn at random."""
+    if not isinstance(table, dict) or "random" not in table:
+        return None
+    def value(x):
+        return (format_value(float(x), quantity, units) if quantity != "stiffness"
+                else f"{float(x):.4g}")
+    if table["random"] == "uniform":
+        return f"uniform {value(table['low'])}-{value(table['high'])}"
+    return f"lognormal, median {value(table['median'])}, sigma {table['sigma']:g}"
+
+
 def describe(run, varying=(), width: int | None = None) -> str:
     """What the line of a run is, in a line: its balls (material, diameter), strikers
     and speed, contact law, walls, precompression and damping; what the swept keys
@@ -74,16 +89,23 @@ def describe(run, varying=(), width: int | None = None) -> str:
     if line.diameter is not None:
         names = sorted(set(np.asarray(line.material).tolist()) - {""})
         d = np.asarray(line.diameter)
-        size = (format_value(float(d[0]), "diameter", units) if np.all(d == d[0])
-                else f"{format_value(float(d.min()), 'diameter', units)}"
-                     f"-{format_value(float(d.max()), 'diameter', units)}")
+        size = _drawn(config.get("diameter"), "diameter", units) or (
+            format_value(float(d[0]), "diameter", units) if np.all(d == d[0])
+            else f"{format_value(float(d.min()), 'diameter', units)}"
+                 f"-{format_value(float(d.max()), 'diameter', units)}")
         what = " and ".join(n.replace("_", " ") for n in names) or "given"
         parts.append(f"N = {line.n} {what} spheres"
                      + ("" if "diameter" in varying else f" of {size}"))
     else:
         parts.append(f"N = {line.n}")
-        if not np.all(line.mass == line.mass[0]):
+        drawn = _drawn(config.get("mass"), "mass", units)
+        if drawn:
+            parts.append(f"masses {drawn}")
+        elif not np.all(line.mass == line.mass[0]):
             parts.append(f"masses {line.mass.min():.3g}-{line.mass.max():.3g}")
+    drawn = _drawn(config.get("stiffness"), "stiffness", units)
+    if drawn:
+        parts.append(f"stiffnesses {drawn}")
     moving = line.velocity != 0.0
     k = line.n if moving.all() else int(np.argmin(moving))
     if moving.any():
@@ -204,9 +226,20 @@ def _sensors(run, figure: Figure, axes) -> None:
     axes.legend(fontsize="small")
 
 
+def _final_name(runs) -> str:
+    """What the velocities at the end of ``runs`` are: final velocities at the terminal
+    state, else the velocities where the runs stopped (at t_end, or a failure)."""
+    if all(run.terminal for run in runs):
+        return "final velocity"
+    ends = {run.end_time for run in runs}
+    if len(ends) == 1:
+        return f"velocity at t = {format_value(ends.pop(), 'time', runs[0].units)}"
+    return "velocity where each run stopped"
+
+
 def _final(run, figure: Figure, axes, log: bool) -> None:
     v = np.asarray(run.final_velocity)
-    label, scaled = axis_label("final velocity", "velocity", run.units, v)
+    label, scaled = axis_label(_final_name([run]), "velocity", run.units, v)
     axes.plot(np.arange(1, run.n + 1), scaled(v), marker="o", markersize=3,
               gid="final_velocity")
     axes.axhline(0.0, color="0.6", linewidth=0.6)
@@ -224,14 +257,19 @@ def _energy(run, figure: Figure, axes) -> None:
     keeps at the initial energy."""
     _snapshots_needed(run, "energy", 2)
     obs = run.observables
-    kinetic, stored = obs["kinetic_energy"], obs["potential_energy"]
+    # measured from the static state a precompressed line starts in: its contacts'
+    # energy there is the impact's, and the sum is the impact energy
+    kinetic, stored = obs["kinetic_energy"], obs["potential_energy"] - run.baseline_energy
     dissipated = obs["dissipated_energy"]
     total = kinetic + stored + dissipated
     label, scaled = axis_label("energy", "energy", run.units,
                                np.concatenate([kinetic, stored, total]))
     t = _time_axis(axes, run, run.times)(run.times)
-    contacts = ("in contacts and walls" if not np.any(run.line.force)
-                else "in contacts and walls, less the forces' work")
+    contacts = "in contacts and walls"
+    if np.any(run.line.position):
+        contacts += " (above the static state)"
+    if np.any(run.line.force):
+        contacts += ", less the forces' work"
     axes.plot(t, scaled(kinetic), label="kinetic", gid="kinetic_energy")
     axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
     if np.any(dissipated):
@@ -250,7 +288,9 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
     ``chainrun.plotting.style(colour=True)`` for the figure to look as saved.
     """
     if view not in VIEWS:
-        raise ChainrunError(f"no view {view!r} (the views: {', '.join(VIEWS)})")
+        close = difflib.get_close_matches(view, VIEWS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ChainrunError(f"no view {view!r} ({hint}the views: {', '.join(VIEWS)})")
     figure = Figure(layout="constrained")
     axes = figure.add_subplot()
     if view == "final":
@@ -285,7 +325,7 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
         raise ChainrunError("not a sweep: its runs have no swept keys")
     units = runs[0].units
     finals = np.concatenate([np.asarray(run.final_velocity) for run in runs])
-    label, scaled = axis_label("final velocity", "velocity", units, finals)
+    label, scaled = axis_label(_final_name(runs), "velocity", units, finals)
     figure = Figure(figsize=(4.5 * len(keys), 3.6), layout="constrained")
     for panel, key in enumerate(keys, start=1):
         axes = figure.add_subplot(1, len(keys), panel)
@@ -307,6 +347,8 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
             axes.plot(along(x), scaled(y), label=name, gid=f"final_velocity/{key}/{ball}",
                       **MARKERS[which % len(MARKERS)])
             axes.set_xlabel(xlabel)
+            if x.min() > 0 and x.max() >= 100 * x.min():  # values spread over decades
+                axes.set_xscale("log")
         axes.axhline(0.0, color="0.6", linewidth=0.6)
         axes.set_ylabel(label)
         axes.legend(fontsize="small")
@@ -323,7 +365,7 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
     cols = min(5, len(runs))
     rows = -(-len(runs) // cols)
     units = runs[0].units
-    label, scaled = axis_label("final velocity", "velocity", units,
+    label, scaled = axis_label(_final_name(runs), "velocity", units,
                                np.concatenate([np.asarray(r.final_velocity) for r in runs]))
     figure = Figure(figsize=(2.6 * cols, 2.2 * rows + 0.4), layout="constrained")
     for i, run in enumerate(runs):
@@ -376,7 +418,7 @@ def draw_ensemble(stats, run) -> Figure:
                       label="each run" if i == 0 else None, gid=f"energy/{i}")
         axes.plot(t, 100.0 * stats.energy_left.mean(axis=0), color="black", linestyle="-",
                   linewidth=1.4, label="mean", gid="energy/mean")
-        axes.set_ylabel("energy left in the line (% of the impact energy)")
+        axes.set_ylabel("energy left (% of the impact)")
         axes.set_ylim(0.0, None)
         axes.legend(fontsize="small")
     keys = run.parameters.get("overrides", {})

@@ -34,7 +34,7 @@ def cli(tmp_path, monkeypatch):
 
 def printed_table(stdout: str) -> dict[str, list[float]]:
     """The 'final velocities' table of the output, by column header."""
-    lines = stdout.split("final velocities\n", 1)[1].strip().splitlines()
+    lines = stdout.split("final velocities (paper units)\n", 1)[1].strip().splitlines()
     head = lines[0].split()
     rows = [line.split() for line in lines[1:]]
     return {name: [float(r[c]) for r in rows] for c, name in enumerate(head) if c}

@@ -73,24 +73,21 @@ def test_the_energy_shares_account_for_the_whole_impact_energy(table1):
         assert sum(got.values()) == pytest.approx(100.0, abs=0.02)
 
 
-def test_an_output_folder_has_a_line_per_run_and_the_statistics(table1):
+def test_an_output_folder_has_a_line_per_run(table1):
+    """A sweep of K is no ensemble: a line per run, and no statistics over them (those
+    are for the same line over random seeds, tests/integration/test_ensembles.py)."""
     result = info(table1)
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     assert lines[0].endswith(": 4 runs")
     rows = [line.split() for line in lines[2:6]]
     assert [r[0] for r in rows] == [f"k={k}.h5" for k in range(1, 5)]
-    forward = []
     for k, row in enumerate(rows, start=1):
         with h5py.File(table1 / f"k={k}.h5") as f:
             v = f["results/final_velocity"][()]
         assert (int(row[1]), int(row[2]), row[3]) == (5, k, "terminal")
         assert float(row[-1]) == pytest.approx(v.max(), rel=1e-5)
-        forward.append(v.max())
-    stats = next(line for line in lines if "largest forward velocity" in line)
-    mean, sd = (float(x) for x in re.search(r"([-\d.]+) \+- ([-\d.]+)", stats).groups())
-    assert mean == pytest.approx(np.mean(forward), rel=1e-3)
-    assert sd == pytest.approx(np.std(forward, ddof=1), rel=1e-3)
+    assert len(lines) == 6 and "standard deviation" not in result.stdout
 
 
 def test_what_is_not_a_run_is_refused_in_one_line(tmp_path):
@@ -152,6 +149,10 @@ def test_every_line_shares_its_own_impact_energy(tmp_path, config):
     out = info(path).stdout
     want = _energies_from_the_file(path)
     got = shares(out)
+    if "kinetic" in got:  # stopped before its terminal state: no fates to sort by
+        want = {"kinetic": sum(want.pop(k) for k in ("rebound", "ejected", "left behind")),
+                **want}
+        assert "before the terminal state" in field(out, "balls")
     for name, value in want.items():
         if name in got or abs(value) > 5e-5:
             assert got[name] == pytest.approx(100 * value, abs=0.006), name
