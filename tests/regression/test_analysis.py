@@ -1,6 +1,6 @@
 """Tests of the analysis: derived quantities, the paper's printed values, stored references.
 
-Three kinds of check (DESIGN.md, Validation):
+Three kinds of check (docs/design.md, Tests):
 
 1. the measurement functions of ``chainrun.analysis.derived`` and the formulas of
    ``nesterenko`` on inputs with known answers;

@@ -1,6 +1,6 @@
 """Tests of ``chainrun.solver.simulate`` against independent evidence.
 
-Three kinds of evidence (DESIGN.md, Validation): the paper's printed numbers at the
+Three kinds of evidence (docs/design.md, Tests): the paper's printed numbers at the
 precision it prints them (Table 1, sections 5a and 5d); the closed form of two balls
 with a linear contact; and the slow scipy reference of ``tests/reference.py`` on short
 lines. Plus the event log's own consistency: the compression is zero at each located

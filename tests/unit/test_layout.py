@@ -1,6 +1,6 @@
 """The package's imports run one way: config -> solver -> store -> analysis -> plotting.
 
-Each part may import only the parts below it (DESIGN.md: data flows one way, one home
+Each part may import only the parts below it (docs/design.md: data flows one way, one home
 per stage); the command line sits on top. Read from the source, so a lazy import
 inside a function counts as much as one at the top of a file.
 """
