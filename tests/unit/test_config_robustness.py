@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pydantic import ValidationError
 
 from chainrun.config import (
     MAX_RUNS,
@@ -243,21 +244,34 @@ def test_unsafe_names_are_refused(name):
     assert line.startswith("name: ")
 
 
+#: The rule for a name, stated here apart from chainrun.config: 1-100 letters, digits, '.', '_' or '-',
+#: neither starting nor ending with '.', and no device name reserved on Windows (CON,
+#: PRN, AUX, NUL, COM1-9, LPT1-9, with or without an extension, in any case).
+_NAME_RULE = re.compile(r"(?![.])[A-Za-z0-9._-]{1,100}(?<![.])")
+_DEVICE = re.compile(r"(con|prn|aux|nul|com[0-9]|lpt[0-9])(\..*)?", re.IGNORECASE)
+
+
 @settings(max_examples=200, deadline=None)
 @given(name=st.text(st.characters(codec="utf-8"), min_size=0, max_size=110)
-       | st.from_regex(r"[A-Za-z0-9._-]{1,100}", fullmatch=True))
+       | st.from_regex(r"[A-Za-z0-9._-]{1,100}", fullmatch=True)
+       | st.sampled_from(UNSAFE_NAMES))
 def test_every_accepted_name_is_one_folder_inside_the_output_folder(name):
+    follows_rule = bool(_NAME_RULE.fullmatch(name)) and not _DEVICE.fullmatch(name)
     try:
         exp = Experiment.model_validate({"name": name, "chain": {"n": 1, "k": 1, "alpha": 1}})
-    except Exception:
+    except ValidationError as exc:
+        # refused: for its name alone (the rest is valid), and only a name the rule refuses
+        assert [error["loc"] for error in exc.errors()] == [("name",)], exc.errors()
+        assert not follows_rule, f"{name!r} follows the rule but was refused"
         return
+    assert follows_rule, f"{name!r} breaks the rule but was accepted"
     results = Path("/results")
     folder = results / exp.name
+    assert exp.name == name
     assert Path(exp.name).name == exp.name and len(Path(exp.name).parts) == 1
     assert exp.name not in (".", "..") and not exp.name.startswith(".")
     assert os.path.normpath(folder).startswith("/results/")
     assert "\x00" not in exp.name and "/" not in exp.name and "\\" not in exp.name
-    assert re.fullmatch(r"[A-Za-z0-9._-]{1,100}", exp.name) and not exp.name.endswith(".")
 
 
 # --- run ids from swept values are file names -----------------------------------------------
