@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -45,13 +46,35 @@ def test_rk4_peer_agrees_with_chainrun_to_its_accuracy(hertz_line):
 
 
 def test_heyoka_peer_agrees_with_chainrun(hertz_line):
-    pytest.importorskip("heyoka")
+    # heyoka is in the bench extra (its wheels are some 100 MB, Linux x86-64 only), not
+    # in the test extra: `make bench` installs it and runs this file before it measures
+    pytest.importorskip("heyoka", reason="heyoka is in the bench extra; `make bench` "
+                        "installs it and runs this test")
     from benchmarks.peers import heyoka_peer
 
     n, t_stop, v_ref = hertz_line
     r = heyoka_peer.solve(n, 1, 1.5, t_stop)
     assert np.max(np.abs(r.final_velocity - v_ref)) < run.ACCURACY["heyoka"]
     assert r.compile_time > 0
+
+
+def test_a_missing_heyoka_leaves_its_peer_out_with_the_reason(monkeypatch):
+    # Where heyoka is not installed (a plain `make test`), the harness runs the other
+    # peers and says why heyoka is absent; importing it fails as if it were missing.
+    from benchmarks.peers import PeerUnavailable, heyoka_peer
+
+    monkeypatch.setitem(sys.modules, "heyoka", None)
+    ok, why = heyoka_peer.available()
+    assert not ok and "chainrun[bench]" in why
+    assert heyoka_peer.version() is None
+    with pytest.raises(PeerUnavailable, match="heyoka is not installed"):
+        heyoka_peer.solve(3, 1, 1.5, 5.0)
+    notes: list[str] = []
+    runners = run._peer_runners(run.Mode(full=False), notes)
+    assert set(runners) == {"scipy", "rk4"}
+    assert notes == [f"heyoka skipped: {why}"]
+    result = run._run_peer("heyoka", heyoka_peer.solve, 3, 1, 1.5, 5.0)
+    assert result == {"tool": "heyoka", "n": 3, "error": why}
 
 
 def test_linear_peers_agree_with_chainrun():
