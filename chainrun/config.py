@@ -1821,10 +1821,17 @@ def _syntax_line(exc: Exception, text: str, fmt: str) -> str:
     return f"line {mark.line + 1}: {reason} (column {mark.column + 1})"
 
 
+#: Most characters an experiment file may have. PyYAML reads about 150 kB a second,
+#: tomllib about 1.6 MB: a file at the limit takes a minute and five seconds. Long
+#: lists belong in a data file (``{file = "masses.npy"}``).
+MAX_TEXT = 8 * 2**20
 #: Deepest nesting of YAML flow collections read (PyYAML takes time quadratic in it).
 MAX_DEPTH = 100
-#: Most entries a YAML mapping may have after its merge keys (``<<``) are expanded.
-MAX_MERGED = 10_000
+#: Most values (scalars, lists and tables) a YAML document may hold, counting an
+#: alias (``*a``) as the whole value it stands for at every use, merge keys (``<<``)
+#: included: ten lines of nested aliases stand for billions of values, which every
+#: later stage would walk.
+MAX_VALUES = 1_000_000
 
 
 def _too_deep(text: str) -> int:
@@ -1856,27 +1863,59 @@ def _value_error(exc: Exception) -> str:
     return text or type(exc).__name__
 
 
+def _expanded_size(root, fail) -> None:
+    """Check the size of a composed YAML document with its aliases expanded.
+
+    Walks the node graph once (an alias is the node it names, shared), counting each
+    node's values with every use of a shared node; calls ``fail(node, reason)`` at the
+    first node that holds more than ``MAX_VALUES``, or that contains itself.
+    """
+    size: dict[int, int] = {}
+    entered: set[int] = set()
+    stack = [(root, False)]
+    while stack:
+        node, leaving = stack.pop()
+        value = node.value if isinstance(node.value, list) else []
+        children = [c for item in value for c in (item if isinstance(item, tuple) else (item,))]
+        if leaving:
+            total = 1 + sum(size[id(c)] for c in children)
+            if total > MAX_VALUES:
+                fail(node, f"more than {MAX_VALUES} values, counting each alias as the "
+                           "whole value it stands for")
+            size[id(node)] = total
+            continue
+        if id(node) in size:
+            continue
+        entered.add(id(node))
+        stack.append((node, True))
+        for child in children:
+            if id(child) in entered and id(child) not in size:
+                fail(child, "an alias inside the value it names: a value cannot contain "
+                            "itself")
+            if id(child) not in size:
+                stack.append((child, False))
+
+
 @functools.cache
 def _yaml():
     """PyYAML and ``_YamlLoader``, imported and built on the first YAML file read.
 
-    ``_YamlLoader`` is ``yaml.SafeLoader`` whose failures to convert a value name their
-    place. PyYAML converts ``2001-13-45`` (a date), ``!!int x`` or an integer of 5000
-    digits with plain ``int()`` or ``datetime``; their ``ValueError`` carries no line.
-    It also expands merge keys without bound; this loader stops at ``MAX_MERGED``
-    entries.
+    ``_YamlLoader`` is ``yaml.SafeLoader`` that refuses a document holding more than
+    ``MAX_VALUES`` values once its aliases are expanded, or a value that contains
+    itself, before it builds anything (``_expanded_size``); and whose failures to
+    convert a value name their place. PyYAML converts ``2001-13-45`` (a date),
+    ``!!int x`` or an integer of 5000 digits with plain ``int()`` or ``datetime``;
+    their ``ValueError`` carries no line.
     """
     import yaml
 
     class _YamlLoader(yaml.SafeLoader):
-        def flatten_mapping(self, node):
-            # Merge keys ("<<: [*a, *a, ...]") copy entries: nested merges grow exponentially.
-            super().flatten_mapping(node)
-            if len(node.value) > MAX_MERGED:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"more than {MAX_MERGED} entries after merging '<<' keys",
-                    node.start_mark,
-                )
+        def construct_document(self, node):
+            def fail(at, reason):
+                raise yaml.constructor.ConstructorError(None, None, reason, at.start_mark)
+
+            _expanded_size(node, fail)
+            return super().construct_document(node)
 
         def construct_object(self, node, deep=False):
             try:
@@ -1920,6 +1959,10 @@ def parse_experiment(text: str, fmt: str, source: str = "<string>", *,
     fmt = {"yml": "yaml"}.get(fmt, fmt)
     if fmt not in ("toml", "yaml"):
         raise ConfigError(source, [f"unknown format {fmt!r} (expected 'toml' or 'yaml')"])
+    if len(text) > MAX_TEXT:
+        raise ConfigError(source, [f"more than {MAX_TEXT} characters, too long for an "
+                                   "experiment file (give long lists as data files, "
+                                   "{file = ...})"])
     if fmt == "toml":
         load, syntax_error = tomllib.loads, tomllib.TOMLDecodeError
     else:
@@ -1963,7 +2006,7 @@ def load_experiment(path: str | os.PathLike[str], *, to_run: bool = True) -> Exp
         )
     try:
         with open(source, encoding="utf-8-sig") as handle:  # a BOM (Windows editors) is dropped
-            text = handle.read()
+            text = handle.read(MAX_TEXT + 1)  # parse_experiment refuses a longer one
     except FileNotFoundError:
         raise ConfigError(source, ["no such file"]) from None
     except IsADirectoryError:

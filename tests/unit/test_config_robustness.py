@@ -22,6 +22,8 @@ from pydantic import ValidationError
 
 from chainrun.config import (
     MAX_RUNS,
+    MAX_TEXT,
+    MAX_VALUES,
     MAX_SNAPSHOTS,
     MAX_ALPHA,
     SWEEPABLE_KEYS,
@@ -103,42 +105,71 @@ def test_deep_nesting(fmt, text):
     assert time.perf_counter() - start < 2.0
 
 
-def test_cyclic_and_exploding_yaml_aliases():
-    # was: RecursionError flattening a sweep table that contains itself
+LAUGHS = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n" + "".join(
+    f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]\n" for i in range(1, 10))
+TOO_MANY = (f"more than {MAX_VALUES} values, counting each alias as the whole value it "
+            "stands for")
+
+
+@pytest.mark.parametrize("use", [
+    "name: *a9\nchain: {n: *a9, k: 1, alpha: 1.5}\ndescription: *a9\n",
+    "name: x\nchain: {n: 3, k: 1, alpha: *a9}\noutput: {times: *a9}\n",
+    "name: x\nchain: {n: 3, k: 1, alpha: 1.5}\n",       # defined, never used
+])
+def test_the_loader_refuses_a_billion_laughs(use):
+    # was: accepted by the loader (9**9 values in ten lines, each list shared), and
+    # bounded only because every message shows a value a few levels deep
+    start = time.perf_counter()
+    lines = problems(LAUGHS + use, "yaml")
+    assert time.perf_counter() - start < 1.0
+    assert lines == [f"line 7: {TOO_MANY} (column 5)"]    # a6: 9**7 values
+
+
+def test_the_loader_counts_values_up_to_its_limit():
+    # a6 alone stands for 9**7 > MAX_VALUES values; a5 for 9**6 < MAX_VALUES
+    assert 9**6 < MAX_VALUES < 9**7
+    five = "".join(LAUGHS.splitlines(keepends=True)[:6])
+    lines = problems(five + "name: x\nchain: {n: 3, k: 1, alpha: 1.5}\n", "yaml")
+    assert lines == [f"a{i}: unknown key" for i in range(6)]
+
+
+def test_the_loader_refuses_a_value_that_contains_itself():
+    # was: accepted, and a sweep table containing itself raised RecursionError
     assert problems(YCHAIN + "sweep: &s {chain: *s}", "yaml") == [
-        "sweep: unknown key 'chain.chain' (did you mean 'chain.n'?)"]
-    laughs = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n" + "".join(
-        f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]\n" for i in range(1, 10))
-    text = laughs + "name: *a9\nchain: {n: *a9, k: 1, alpha: 1.5}\ndescription: *a9\n"
-    start = time.perf_counter()
-    lines = problems(text, "yaml")  # 9**9 items if printed whole
-    assert time.perf_counter() - start < 2.0
-    assert lines[0].startswith("name: expected a string, got [[[[...], [...]")
-    assert all(len(line) < 200 for line in lines)
-    # the same in keys that take a list of values, read item by item
-    text = laughs + "name: x\nchain: {n: 3, k: 1, alpha: *a9}\noutput: {times: *a9}\n"
-    start = time.perf_counter()
-    lines = problems(text, "yaml")
-    assert time.perf_counter() - start < 2.0
-    assert lines[0].startswith("chain.alpha[0]: expected a number, got [[[[...], [...]")
-    assert all(len(line) < 200 for line in lines)
+        "line 3: an alias inside the value it names: a value cannot contain itself "
+        "(column 8)"]
+    assert problems(YCHAIN + "description: &d [1, [2, *d]]", "yaml") == [
+        "line 3: an alias inside the value it names: a value cannot contain itself "
+        "(column 14)"]
 
 
 def test_yaml_merge_key_bomb():
-    # was: nested "<<" merges copied 9**9 entries (minutes, gigabytes)
+    # was: nested "<<" merges copied 9**9 entries (minutes, gigabytes) in PyYAML before
+    # 6.0.4; the loader refuses the document before it merges anything
     text = "a0: &a0 {k: 1}\n" + "".join(
         f"a{i}: &a{i} {{<<: [" + ", ".join([f"*a{i - 1}"] * 9) + "]}\n" for i in range(1, 10))
     start = time.perf_counter()
     lines = problems(YCHAIN + text, "yaml")
-    assert time.perf_counter() - start < 2.0
-    # PyYAML before 6.0.4 copies every merged entry (9**9 here) and the loader stops it
-    # at MAX_MERGED; from 6.0.4 PyYAML merges each key once, and the anchors' tables
-    # are plain unknown keys
-    limit = ["line 8: more than 10000 entries after merging '<<' keys (column 5)"]
-    assert lines == limit or lines == [f"a{i}: unknown key" for i in range(10)]
+    assert time.perf_counter() - start < 1.0
+    assert lines == [f"line 9: {TOO_MANY} (column 14)"]
     merged = YCHAIN.replace("chain: {n: 3, k: 1, alpha: 1.5}",
                             "base: &b {n: 3, k: 1}\nchain: {<<: *b, alpha: 1.5}")
     assert problems(merged, "yaml") == ["base: unknown key"]
+
+
+@pytest.mark.parametrize("fmt", ["toml", "yaml"])
+def test_a_file_too_long_is_refused_before_it_is_read(fmt, tmp_path):
+    text = (CHAIN if fmt == "toml" else YCHAIN) + "#" * MAX_TEXT + "\n"
+    start = time.perf_counter()
+    assert problems(text, fmt) == [
+        f"more than {MAX_TEXT} characters, too long for an experiment file (give long "
+        "lists as data files, {file = ...})"]
+    path = tmp_path / f"long.{fmt}"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_experiment(path)
+    assert info.value.problems == problems(text, fmt)
+    assert time.perf_counter() - start < 2.0
 
 
 @pytest.mark.parametrize("text, expected", [
