@@ -1818,6 +1818,10 @@ def _syntax_line(exc: Exception, text: str, fmt: str) -> str:
     reason = f"{problem} ({context})" if context else problem
     if mark is None:
         return reason
+    if text[mark.index:mark.index + 1] == "\t":  # PyYAML's own text names no rule
+        indent = text[text.rfind("\n", 0, mark.index) + 1:mark.index].strip(" \t") == ""
+        reason = ("a tab: YAML does not allow tabs for indentation; indent with spaces"
+                  if indent else "a tab where YAML allows only spaces")
     return f"line {mark.line + 1}: {reason} (column {mark.column + 1})"
 
 

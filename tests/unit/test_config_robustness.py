@@ -173,6 +173,20 @@ def test_a_file_too_long_is_refused_before_it_is_read(fmt, tmp_path):
 
 
 @pytest.mark.parametrize("text, expected", [
+    ("name: x\nchain:\n\tn: 3\n", "line 3: a tab: YAML does not allow tabs for "
+     "indentation; indent with spaces (column 1)"),
+    ("name: x\nchain:\n  n: 3\n  \tk: 1\n", "line 4: a tab: YAML does not allow tabs "
+     "for indentation; indent with spaces (column 3)"),
+    ("name: x\nchain: {n: 3,\tk: 1}\n", "line 2: a tab where YAML allows only spaces "
+     "(column 14)"),
+])
+def test_a_tab_in_yaml_is_named(text, expected):
+    # was: PyYAML's "found character '\\t' that cannot start any token (while scanning
+    # for the next token)"
+    assert problems(text, "yaml") == [expected]
+
+
+@pytest.mark.parametrize("text, expected", [
     ("alpha: 2001-13-45", "line 2: cannot read '2001-13-45': month must be in 1..12 (column 8)"),
     ("alpha: !!int abc", "line 2: cannot read 'abc': invalid literal for int() with base 10: "
                          "'abc' (column 8)"),
