@@ -251,6 +251,11 @@ SWEEPABLE_KEYS: dict[str, type] = {
 
 #: The units an experiment may be written in: the paper's (every coefficient 1), or SI.
 UNITS = ("paper", "si")
+
+
+def _canonical_units(value: Any) -> str | None:
+    """The units a file's ``units`` names, in lower case ("SI" is "si"); None if none."""
+    return value.lower() if isinstance(value, str) and value.lower() in UNITS else None
 #: Largest contact exponent: beyond it a contact stiffens so abruptly that the steps
 #: the solver needs to resolve it shrink without end.
 MAX_ALPHA = 10.0
@@ -1330,10 +1335,11 @@ class Experiment(BaseModel):
     @classmethod
     def _units(cls, value: Any) -> str:
         value = _check_str(value)
-        if value not in UNITS:
-            raise _fail([_Issue(f"expected one of {', '.join(map(repr, UNITS))}, got "
-                                f"{show_value(value)}{_suggest(value, list(UNITS))}")])
-        return value
+        if _canonical_units(value) is None:
+            raise _fail([_Issue(f"expected one of {', '.join(map(repr, UNITS))} (in any "
+                                f"case), got {show_value(value)}"
+                                f"{_suggest(value.lower(), list(UNITS))}")])
+        return _canonical_units(value)
 
     @field_validator("output", "solver", "walls", mode="before")
     @classmethod
@@ -1634,9 +1640,9 @@ def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
     index), keys that conflict, a stop time it needs. Nothing when its tables are
     themselves wrong (reported with them)."""
     chain, walls = merged.get("chain"), merged.get("walls")
-    units = merged.get("units", "paper")
+    units = _canonical_units(merged.get("units", "paper"))
     if not isinstance(chain, Mapping) or not (walls is None or isinstance(walls, Mapping)) \
-            or units not in UNITS:
+            or units is None:
         return []
     solver = merged.get("solver")
     try:

@@ -194,9 +194,31 @@ def test_si_conflicts(chain, expected):
     assert any(line.startswith(expected) for line in lines), lines
 
 
+SI_CRADLE = '[chain]\nn = 3\nk = 1\nspeed = 0.5\ndiameter = 0.0254\nmaterial = "steel"\n'
+
+
+@pytest.mark.parametrize("written", ["SI", "Si", "si"])
+def test_units_in_any_case_are_the_same_units(written):
+    # was: "SI" refused ("expected one of 'paper', 'si'")
+    exp = parse_experiment(HEAD + f'units = "{written}"\n' + SI_CRADLE, "toml")
+    (spec,) = exp.runs()
+    assert exp.units == spec.units == "si"
+    (canonical,) = parse_experiment(HEAD + 'units = "si"\n' + SI_CRADLE, "toml").runs()
+    assert spec.config_hash == canonical.config_hash
+    np.testing.assert_array_equal(spec.line.mass, canonical.line.mass)
+    # and the line is still checked as an SI line
+    assert problems(HEAD + f'units = "{written}"\n' + SI_CRADLE + "stiffness = 1e9\n") == [
+        "chain.stiffness: set by the material and diameter (Hertz, alpha = 3/2); give one "
+        "or the other"]
+    assert parse_experiment(HEAD + 'units = "Paper"\n[chain]\nn = 3\nk = 1\nalpha = 1\n',
+                            "toml").units == "paper"
+
+
 def test_units_must_be_known():
-    assert problems(HEAD + 'units = "SI"\n[chain]\nn = 3\nk = 1\nalpha = 1\n') == [
-        "units: expected one of 'paper', 'si', got 'SI'"]
+    assert problems(HEAD + 'units = "metric"\n[chain]\nn = 3\nk = 1\nalpha = 1\n') == [
+        "units: expected one of 'paper', 'si' (in any case), got 'metric'"]
+    assert problems(HEAD + 'units = "SIS"\n[chain]\nn = 3\nk = 1\nalpha = 1\n') == [
+        "units: expected one of 'paper', 'si' (in any case), got 'SIS' (did you mean 'si'?)"]
 
 
 # --- precompression ----------------------------------------------------------------------
