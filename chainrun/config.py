@@ -559,10 +559,12 @@ class Chain(BaseModel):
     @field_validator("alpha")
     @classmethod
     def _alpha_unless_real(cls, alpha: Any, info: ValidationInfo) -> Any:
-        # required unless a material's Hertz law sets it (3/2)
+        # required unless a material's Hertz law sets it (3/2), or there is no contact
+        # between balls (one ball: a wall has its own alpha)
         real = ("material", "young", "poisson", "density")
-        if alpha is None and all(key in info.data and info.data[key] is None for key in real):
-            raise _fail([_Issue("required")])
+        if alpha is None and all(key in info.data and info.data[key] is None for key in real) \
+                and info.data.get("n") != 1:
+            raise _fail([_Issue("required", involves=("n",))])
         return alpha
 
     @field_validator("speed")
@@ -814,10 +816,15 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
                                      "or give the wall a material"))
             continue
         alpha = spec.alpha
-        if alpha is None:  # the law of the contact next to it
-            a = line_kw.get("alpha", 1.5)
-            alpha = float(np.asarray(a).reshape(-1)[0 if side == "left" else -1]) if n > 1 \
-                else 1.5
+        if alpha is None and (n > 1 or real):  # the law of the contact next to it
+            alpha = float(np.asarray(line_kw["alpha"]).reshape(-1)[0 if side == "left" else -1])
+        elif alpha is None:  # one ball: no contact next to it, but the chain's alpha
+            if not isinstance(chain.alpha, float):
+                problems.append(_Problem(f"walls.{side}.alpha", "required: a line of one "
+                                         "ball has no contact whose exponent the wall could "
+                                         "take (or give chain.alpha)"))
+                continue
+            alpha = chain.alpha
         built[side] = Wall(1.0 if spec.stiffness is None else spec.stiffness, alpha, spec.gap)
     if problems:
         raise LineError(problems)
@@ -1450,7 +1457,7 @@ class Experiment(BaseModel):
             if walls.left is not None or walls.right is not None:
                 config["walls"] = walls.model_dump(exclude_none=True)
             canonical = _canonical_json(config, times_json)
-            k, alpha = _k_and_alpha(chain)
+            k, alpha = _k_and_alpha(chain, walls)
             specs.append(
                 RunSpec(
                     experiment=self.name,
@@ -1494,9 +1501,10 @@ def _fields(model: BaseModel) -> dict[str, Any]:
     return {key: value for key, value in model if value is not None}
 
 
-def _k_and_alpha(chain: Chain) -> tuple[int, float]:
+def _k_and_alpha(chain: Chain, walls: Walls) -> tuple[int, float]:
     """K, the leading balls that move, and the contacts' exponent if it is one number
-    (NaN if it varies): what summaries and the index show of a run."""
+    (NaN if it varies, or if there is no contact): what summaries and the index show
+    of a run."""
     if chain.velocity is None:
         k = chain.k
     else:
@@ -1513,7 +1521,11 @@ def _k_and_alpha(chain: Chain) -> tuple[int, float]:
             moving = a != 0.0
             k = len(a) if moving.all() else int(np.argmin(moving))
     a = chain.alpha
-    if a is None:
+    if a is None and chain.n == 1 and all(getattr(chain, key) is None for key in _SI_KEYS):
+        # one ball: its walls' exponents alone (each given, see build_line)
+        given = {w.alpha for w in (walls.left, walls.right) if w is not None}
+        alpha = given.pop() if len(given) == 1 and None not in given else math.nan
+    elif a is None:
         alpha = 1.5  # Hertz, from the material
     elif isinstance(a, float):
         alpha = a

@@ -133,8 +133,10 @@ def render(s, pulses=None) -> str:
                    f"most {where}"]
     lines = [
         f"{s.path}  ({human_size(s.file_bytes)}, chainrun {s.creator_version}, {s.created})",
-        f"model     N = {s.n} balls, {striking}; {law_name(s.alpha)} contacts"
-        + (f" (alpha = {s.alpha:g})" if math.isfinite(s.alpha) else "") + f"; {units}",
+        f"model     N = {s.n} balls, {striking}; "
+        + (f"{law_name(s.alpha)} contacts" + (f" (alpha = {s.alpha:g})"
+                                              if math.isfinite(s.alpha) else "")
+           if s.n > 1 else "no contacts between balls") + f"; {units}",
         *([f"line      {s.line}"] if s.line else []),
         f"outcome   {outcome}",
         f"cost      {_events(s.events)}, {s.steps} steps ({s.rejected_steps} rejected), "

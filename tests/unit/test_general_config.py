@@ -221,6 +221,45 @@ def test_units_must_be_known():
         "units: expected one of 'paper', 'si' (in any case), got 'SIS' (did you mean 'si'?)"]
 
 
+# --- one ball: no contact between balls ---------------------------------------------------
+
+
+def test_one_ball_against_a_wall_needs_only_the_walls_exponent():
+    # was: refused with "chain.alpha: required", though one ball has no contact with
+    # another; the wall's own alpha is all its contact needs
+    text = HEAD + "[chain]\nn = 1\nk = 1\n[walls.right]\nalpha = 1.0\ngap = 0.5\n"
+    (spec,) = parse_experiment(text, "toml").runs()
+    assert spec.line.right == Wall(1.0, 1.0, 0.5) and spec.line.alpha.size == 0
+    assert spec.alpha == 1.0
+    # linear wall: it comes back at its speed after half a period, pi
+    from chainrun.solver import simulate_line
+
+    sol = simulate_line(spec.line)
+    assert sol.terminal and sol.final_velocity[0] == pytest.approx(-1.0, abs=1e-12)
+    assert sol.end_time == pytest.approx(0.5 + math.pi, abs=1e-10)
+
+
+def test_one_ball_wall_takes_the_chains_exponent_or_asks_for_its_own():
+    # was: a wall next to one ball took alpha = 3/2 whatever chain.alpha said
+    text = HEAD + "[chain]\nn = 1\nk = 1\nalpha = 1.0\n[walls.left]\n[walls.right]\n" \
+                  "[solver]\nt_end = 10.0\n"
+    line = line_of(text)
+    assert line.left.alpha == line.right.alpha == 1.0
+    assert problems(HEAD + "[chain]\nn = 1\nk = 1\n[walls.left]\nalpha = 2.0\n"
+                    "[walls.right]\n[solver]\nt_end = 10.0\n") == [
+        "walls.right.alpha: required: a line of one ball has no contact whose exponent the "
+        "wall could take (or give chain.alpha)"]
+
+
+def test_one_free_ball_needs_no_exponent():
+    (spec,) = parse_experiment(HEAD + "[chain]\nn = 1\nk = 1\n", "toml").runs()
+    assert spec.line.n == 1 and math.isnan(spec.alpha)
+    # two balls do touch: their contact needs its law
+    assert problems(HEAD + "[chain]\nn = 2\nk = 1\n") == ["chain.alpha: required"]
+    swept = HEAD + '[chain]\nn = 1\nk = 1\n[sweep]\n"chain.n" = [1, 3]\n'
+    assert problems(swept) == ["sweep (n=3): chain.alpha: required"]
+
+
 # --- precompression ----------------------------------------------------------------------
 
 
