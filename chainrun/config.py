@@ -979,6 +979,32 @@ def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[_Is
     return tuple(float(t) for t in times), []
 
 
+def _sensor_balls(value: Any) -> tuple[list[tuple[int, int]], list[_Issue]]:
+    """The valid ball numbers of ``output.sensors``, each with its position in the
+    list, and every problem of the others."""
+    if not isinstance(value, (list, tuple)):
+        return [], [_Issue(f"expected a list of ball numbers, got {show_value(value)}")]
+    issues: list[_Issue] = []
+    balls: list[int] = []
+    kept: list[tuple[int, int]] = []
+    for position, item in enumerate(value):
+        try:
+            ball = _check_int(item)
+        except PydanticCustomError as exc:
+            issues.extend(i._replace(reason=f"{i.reason} at position {position}")
+                          for i in exc.context["issues"])
+            continue
+        if ball < 1:
+            issues.append(_Issue(f"must be a ball number >= 1, got {ball} at position "
+                                 f"{position}"))
+        elif ball in balls:
+            issues.append(_Issue(f"ball {ball} is listed twice (position {position})"))
+        else:
+            balls.append(ball)
+            kept.append((position, ball))
+    return kept, issues
+
+
 class Output(BaseModel):
     """What to record: snapshot times, a list or a ``{start, stop, step}`` range, and
     force sensors: balls whose contact forces are sampled every ``sensor_dt``."""
@@ -987,44 +1013,27 @@ class Output(BaseModel):
 
     times: tuple[float, ...] = ()
     sensors: tuple[int, ...] = ()
-    sensor_dt: _OptFloat = Field(None, gt=0)
+    sensor_dt: _OptFloat = Field(None, gt=0, validate_default=True)
     sensor_end: _OptFloat = Field(None, gt=0)
 
     @field_validator("sensors", mode="before")
     @classmethod
     def _sensors(cls, value: Any) -> tuple[int, ...]:
-        if not isinstance(value, (list, tuple)):
-            raise _fail([_Issue(f"expected a list of ball numbers, got {show_value(value)}")])
-        issues: list[_Issue] = []
-        balls: list[int] = []
-        for position, item in enumerate(value):
-            try:
-                ball = _check_int(item)
-            except PydanticCustomError as exc:
-                issues.extend(i._replace(reason=f"{i.reason} at position {position}")
-                              for i in exc.context["issues"])
-                continue
-            if ball < 1:
-                issues.append(_Issue(f"must be a ball number >= 1, got {ball} at position "
-                                     f"{position}"))
-            elif ball in balls:
-                issues.append(_Issue(f"ball {ball} is listed twice (position {position})"))
-            balls.append(ball)
+        kept, issues = _sensor_balls(value)
         if issues:
             raise _fail(issues)
-        return tuple(balls)
+        return tuple(ball for _, ball in kept)
 
-    @model_validator(mode="after")
-    def _sensors_and_interval(self) -> "Output":
-        if self.sensors and self.sensor_dt is None:
-            raise _fail([_Issue("required with output.sensors (the sampling interval)",
-                                ("sensor_dt",))])
-        issues = [_Issue("given without output.sensors", (key,))
-                  for key in ("sensor_dt", "sensor_end")
-                  if getattr(self, key) is not None and not self.sensors]
-        if issues:
-            raise _fail(issues)
-        return self
+    @field_validator("sensor_dt", "sensor_end", mode="after")
+    @classmethod
+    def _sensors_and_interval(cls, value: float | None, info: ValidationInfo) -> float | None:
+        # sensors absent from info.data: given, but wrong (reported with them)
+        given = info.data.get("sensors", True)
+        if given and value is None and info.field_name == "sensor_dt":
+            raise _fail([_Issue("required with output.sensors (the sampling interval)")])
+        if value is not None and not given:
+            raise _fail([_Issue("given without output.sensors")])
+        return value
 
     @field_validator("times", mode="before")
     @classmethod
@@ -1433,7 +1442,7 @@ class Experiment(BaseModel):
                 problems += _translate(exc, ("chain",))
                 chain = None
             else:
-                problems += _sensors_beyond_n(self.output.sensors, chain.n)
+                problems += _sensors_beyond_n(enumerate(self.output.sensors), chain.n)
             try:
                 walls = Walls.model_validate(data.get("walls") or {})
             except ValidationError as exc:
@@ -1537,14 +1546,11 @@ def _k_and_alpha(chain: Chain, walls: Walls) -> tuple[int, float]:
     return int(k), float(alpha)
 
 
-def _sensors_beyond_n(sensors: tuple[int, ...], n: int) -> list[_Problem]:
-    """The problem of sensor balls that the chain does not have."""
-    beyond = [(i, b) for i, b in enumerate(sensors) if b > n]
-    if not beyond:
-        return []
-    i, b = beyond[0]
+def _sensors_beyond_n(sensors, n: int) -> list[_Problem]:
+    """The problems of sensor balls that the chain does not have, one per ball
+    (``sensors``: (position, ball) pairs)."""
     return [_Problem("output.sensors", f"ball {b} (position {i}) is beyond chain.n ({n})",
-                     frozenset({"chain.n"}))]
+                     frozenset({"chain.n"})) for i, b in sensors if b > n]
 
 
 def _samples(sensors: tuple[int, ...], dt: float | None, end: float | None) -> int:
@@ -1725,6 +1731,12 @@ def _validate(data: Any, source: str, to_run: bool = True) -> Experiment:
             base["output"] = output
         except ValidationError:
             output = None  # reported with the whole file below
+    # the sensor balls, checked against each run's chain.n even where the output table
+    # has other problems (every problem at once)
+    raw_output = base.get("output")
+    sensors = (list(enumerate(output.sensors)) if output is not None else
+               _sensor_balls(raw_output.get("sensors", ()))[0]
+               if isinstance(raw_output, Mapping) else [])
 
     size_lines: list[str] = []
     runs = math.prod(len(v) for v in valid.values())
@@ -1784,13 +1796,13 @@ def _validate(data: Any, source: str, to_run: bool = True) -> Experiment:
                 problems += _times_after_t_end(output.times, t_end)
                 problems += _sensor_problems(output, t_end)
         chain = merged.get("chain")
-        if output is not None and output.sensors and isinstance(chain, Mapping):
+        if sensors and isinstance(chain, Mapping):
             try:
                 n = Chain.model_validate(chain, context=context).n
             except ValidationError:
                 pass  # reported above
             else:
-                problems += _sensors_beyond_n(output.sensors, n)
+                problems += _sensors_beyond_n(sensors, n)
         if not problems:
             continue
         label = _label(overrides)

@@ -114,3 +114,41 @@ def test_sensors_stop_where_the_file_says_and_are_counted_before_the_run():
     sol = simulate(5, 1, 1.5, sensors=[2], sensor_dt=0.1, sensor_end=1.55)
     np.testing.assert_allclose(sol.sensor_time, 0.1 * np.arange(16))
     assert sol.end_time > 3.0  # the run goes on; its sensors stopped
+
+
+@pytest.mark.parametrize("output, expected", [
+    ("sensors = [0, 99]\nsensor_dt = 0.1",
+     ["output.sensors: must be a ball number >= 1, got 0 at position 0",
+      "output.sensors: ball 99 (position 1) is beyond chain.n (5)"]),
+    ("sensors = [98, 99]\nsensor_dt = 0.1\nsensor_end = 1.0",
+     ["output.sensors: ball 98 (position 0) is beyond chain.n (5)",
+      "output.sensors: ball 99 (position 1) is beyond chain.n (5)"]),
+    ("sensors = [2, 99]",
+     ["output.sensor_dt: required with output.sensors (the sampling interval)",
+      "output.sensors: ball 99 (position 1) is beyond chain.n (5)"]),
+    ("sensors = [0]",
+     ["output.sensors: must be a ball number >= 1, got 0 at position 0",
+      "output.sensor_dt: required with output.sensors (the sampling interval)"]),
+    ("sensors = ['a', 3, 3, 7]\nsensor_dt = -1",
+     ["output.sensors: expected an integer, got 'a' at position 0",
+      "output.sensors: ball 3 is listed twice (position 2)",
+      "output.sensor_dt: must be > 0, got -1.0",
+      "output.sensors: ball 7 (position 3) is beyond chain.n (5)"]),
+])
+def test_every_problem_of_the_sensors_at_once(output, expected):
+    # was: only the first of them (a problem of the list hid the others, and the
+    # balls beyond chain.n were checked only once the output table was valid)
+    base = 'name = "x"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n[output]\n'
+    with pytest.raises(ConfigError) as exc:
+        parse_experiment(base + output, "toml")
+    assert exc.value.problems == expected
+
+
+def test_sensors_beyond_n_by_sweep_combination():
+    text = ('name = "x"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n[output]\nsensors = [0, 4]\n'
+            'sensor_dt = 0.1\n[sweep]\n"chain.n" = [5, 3]\n')
+    with pytest.raises(ConfigError) as exc:
+        parse_experiment(text, "toml")
+    assert exc.value.problems == [
+        "output.sensors: must be a ball number >= 1, got 0 at position 0",
+        "sweep (n=3): output.sensors: ball 4 (position 1) is beyond chain.n (3)"]
