@@ -79,7 +79,7 @@ with the same method as above, generalised:
   in paper units; results are converted back. The paper's line is its own unit: on
   it ``reference_line`` does exactly what ``reference_solve`` does.
 * Initially a contact is active if compressed, or touching (to 1e-13) and not
-  parting. When every active contact touches without load, without moving and
+  parting: neither moving apart nor, touching at rest, pulled apart by the forces. When every active contact touches without load, without moving and
   without being pressed (none, a line moving as one body, or a line at rest ahead of
   a flying striker), the free flight takes over: positions are parabolas under the
   forces, and the next closing of an inactive contact is the earliest root of
@@ -683,8 +683,15 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
     lost = 0.0                                           # dissipated energy
     d0, r0 = comp(x), rate(v)
     # Compressed, or touching (to rounding) and not parting: active from t = 0; a
-    # damped compressed contact whose law gives no force is loose.
-    active = present & ((d0 > 0) | ((d0 >= -1e-13) & (r0 >= -FLOOR)))
+    # damped compressed contact whose law gives no force is loose. Touching without
+    # moving (|r0| <= FLOOR), a contact is parting when the forces pull its balls apart
+    # (its compression's second derivative, with the compressed contacts' forces and
+    # the external ones, is negative): it carries no force then, and is not active.
+    pressed = present & (d0 > 0)
+    pulled = rate(make_rhs(pressed, np.zeros_like(pressed))(0.0, np.r_[x, v, [0.0][:extra]])
+                  [n:2 * n]) < 0.0
+    touching = (d0 >= -1e-13) & ((r0 > FLOOR) | ((r0 >= -FLOOR) & ~pulled))
+    active = present & ((d0 > 0) | touching)
     loose = damped & active & (d0 > 0) & (law(d0, r0) <= 0.0)
     active &= ~loose
     events: list[tuple[float, int, int, float]] = []

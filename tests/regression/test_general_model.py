@@ -211,6 +211,21 @@ def test_gap_shifts_a_whole_run(alpha):
                                rtol=0, atol=TOL["closed_form"])
 
 
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+def test_touching_balls_pulled_apart_part(alpha):
+    # Touching at rest, pulled apart by the forces: no contact force, two parabolas.
+    m, f = np.array([1.0, 2.0]), np.array([-0.3, 0.2])
+    times = np.array([0.5, 1.0, 2.0])
+    sol = run(Line.make(2, mass=m, alpha=alpha, velocity=[0.0, 0.0], force=f), times,
+              t_end=2.0)
+    assert_ok(sol, terminal=False)
+    assert located(sol)[0].size == 0
+    np.testing.assert_allclose(sol.positions, f * times[:, None] ** 2 / (2 * m), rtol=0,
+                               atol=TOL["closed_form"])
+    np.testing.assert_allclose(sol.velocities, f * times[:, None] / m, rtol=0,
+                               atol=TOL["closed_form"])
+
+
 def test_bouncing_ball_under_a_force():
     # A ball pressed on a linear wall by a constant force (gravity): parabolic flights
     # between bounces of closed-form duration; no terminal state, so t_end.

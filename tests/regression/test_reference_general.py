@@ -206,6 +206,29 @@ def test_bouncing_ball_under_a_force():
         e0, abs=TOL["energy"] * 0.5 * m * u1 * u1)
 
 
+@pytest.mark.parametrize("alpha", [1.0, 1.5])
+def test_touching_balls_pulled_apart_part(alpha):
+    # Two balls touching at rest, the forces pulling them apart: the contact carries
+    # no force, and each flies off on its own parabola x = f t^2 / (2 m). (Was: the
+    # contact started active, and its continuation sign(c)|c|^alpha held them together.)
+    m, f = np.array([1.0, 2.0]), np.array([-0.3, 0.2])
+    line = Line.make(2, mass=m, alpha=alpha, velocity=[0.0, 0.0], force=f)
+    times = np.array([0.5, 1.0, 2.0])
+    r = reference_line(line, t_max=2.0, times=times)
+    assert r.event_time.size == 0
+    np.testing.assert_allclose(r.positions, f * times[:, None] ** 2 / (2 * m), rtol=0,
+                               atol=TOL["snapshot"])
+    np.testing.assert_allclose(r.velocities, f * times[:, None] / m, rtol=0,
+                               atol=TOL["snapshot"])
+    # pushed together instead, they press on each other (the centre of mass moves
+    # under the total force) and the contact stays closed: no event, compressed
+    r = reference_line(Line.make(2, mass=m, alpha=alpha, velocity=[0.0, 0.0], force=-f),
+                       t_max=2.0, times=times)
+    assert r.event_time.size == 0
+    np.testing.assert_allclose(r.velocities @ m, -f.sum() * times, rtol=0, atol=1e-12)
+    assert np.all(r.positions[:, 0] - r.positions[:, 1] > 0)
+
+
 # ---- free flight under forces: the stable quadratic --------------------------------------
 @pytest.mark.parametrize(("r", "b", "t_star"), [
     (1.0, 1e-12, 1.0),         # barely curved: the textbook formula loses ~4 digits
