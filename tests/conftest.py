@@ -25,13 +25,21 @@ def pytest_collection_modifyitems(items):
 # report (also from pytest-xdist workers) and is summed here, after the run.
 
 
+# A test may add ``record_property("fuzz_detail", text)``: what became of its cases.
+
+
 def pytest_terminal_summary(terminalreporter):
     counts: dict[str, int] = {}
+    details: dict[str, str] = {}
     for outcome in ("passed", "failed"):
         for report in terminalreporter.stats.get(outcome, []):
             for name, value in getattr(report, "user_properties", ()):
                 if name == "fuzz_cases":
                     counts[report.nodeid.split("::")[-1]] = int(value)
+                elif name == "fuzz_detail":
+                    details[report.nodeid.split("::")[-1]] = str(value)
     if counts:
         parts = ", ".join(f"{name} {n}" for name, n in sorted(counts.items()))
         terminalreporter.write_line(f"fuzz: {sum(counts.values())} cases tried ({parts})")
+    for name, text in sorted(details.items()):
+        terminalreporter.write_line(f"fuzz: {name}: {text}")
