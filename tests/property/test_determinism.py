@@ -1,13 +1,22 @@
-"""The same config gives bitwise-identical results: reruns, and any ``--jobs``.
+"""The same config gives the same results: bitwise on reruns and any ``--jobs``; to
+rounding on another CPU.
 
 Compared are the arrays (final state, separation, events, snapshots) and every dataset
 and attribute of the run and index files, except what records when and how long:
 the root ``created`` attribute, ``diagnostics@wall_time`` and the index's
 ``wall_time`` column. File bytes are not compared: they hold those timestamps.
+
+Across CPUs: the kernels compiled for a generic x86-64 CPU (``NUMBA_CPU_NAME=generic``,
+no FMA, no AVX; in a process of its own with its own cache folder) against the
+kernels compiled for this machine, on the regression lines and general ones
+(``CPU_LINES``).
 """
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import h5py
@@ -16,7 +25,7 @@ import pytest
 from click.testing import CliRunner
 
 from chainrun.cli import main
-from chainrun.solver import simulate
+from chainrun.solver import Line, Wall, simulate, simulate_line
 
 #: Attributes and datasets that record the time of writing or the cost of a run.
 VARYING = {"/@created", "/diagnostics@wall_time", "/table/wall_time"}
@@ -112,3 +121,85 @@ def test_any_number_of_jobs_gives_the_same_files(tmp_path):
     run_cli(config, tmp_path / "one", "--jobs", "1")
     run_cli(config, tmp_path / "two", "--jobs", "2")
     assert_same_results(tmp_path / "one", tmp_path / "two")
+
+
+# --- another CPU ---------------------------------------------------------------------------
+#: Results across CPUs agree to this, relative to the line's velocity scale (positions:
+#: to its length scale, times the line's extent in it).
+CPU_TOL = 1e-13
+
+
+def _cpu_lines() -> dict[str, tuple[Line, dict]]:
+    """The lines compared across CPUs, by name: (line, keyword arguments of the run)."""
+    rng = np.random.default_rng(35)
+    n = 12
+    snap = {"times": np.linspace(0.0, 20.0, 21)}
+    lines = {f"table1-k{k}": (Line.paper(5, k, 1.5), {}) for k in (1, 2, 3, 4)}
+    lines.update({
+        "paper-n20-k2": (Line.paper(20, 2, 1.5), snap),
+        "paper-n60-k1-hertz": (Line.paper(60, 1, 1.5), {}),
+        "paper-n30-k1-linear": (Line.paper(30, 1, 1.0), snap),
+        "paper-n8-k3-alpha2.5": (Line.paper(8, 3, 2.5), {}),
+        "masses-gaps": (Line.make(n, mass=10 ** rng.uniform(-0.5, 0.5, n),
+                                  stiffness=10 ** rng.uniform(-0.5, 0.5, n - 1),
+                                  alpha=rng.choice([1.0, 1.5, 2.0], n - 1),
+                                  gap=rng.uniform(-0.01, 0.2, n - 1), k=2), snap),
+        "head-on-damped-walls": (Line.make(n, velocity=np.r_[1.0, np.zeros(n - 2), -0.7],
+                                           alpha=1.5, damping=0.3, damping_exponent=0.25,
+                                           left=Wall(2.0, 1.5, 0.1, damping=0.5),
+                                           right=Wall(0.5, 1.0, 0.0)),
+                                 {**snap, "t_end": 40.0}),
+        "gravity-on-a-wall": (Line.make(6, mass=np.linspace(1.0, 2.0, 6), alpha=1.5,
+                                        gap=0.05, force=0.3, velocity=np.zeros(6),
+                                        right=Wall(1.0, 1.5, 0.0)), {"t_end": 30.0}),
+        "steel-si": (Line.make(10, mass=0.0673549, stiffness=1.20843851e10, alpha=1.5,
+                               speed=0.5), {}),
+    })
+    return lines
+
+
+def _cpu_results() -> dict[str, np.ndarray]:
+    """Final and snapshot velocities and positions of ``_cpu_lines``, flat by name."""
+    out = {}
+    for name, (line, kw) in _cpu_lines().items():
+        sol = simulate_line(line, **kw)
+        assert sol.outcome.ok, f"{name}: {sol.message}"
+        sc = line.scales()
+        out[f"{name}/v"] = np.concatenate([sol.final_velocity,
+                                           sol.velocities.reshape(-1)]) / sc.velocity
+        out[f"{name}/x"] = np.concatenate([sol.final_position,
+                                           sol.positions.reshape(-1)]) / sc.length
+        out[f"{name}/events"] = np.array([sol.event_time.size])
+    return out
+
+
+def _dump(path: str) -> None:
+    """Write ``_cpu_results`` to ``path`` (the other CPU's process calls this)."""
+    np.savez(path, **_cpu_results())
+
+
+@pytest.mark.slow
+def test_a_generic_cpu_gives_the_same_answers(tmp_path):
+    """The kernels compiled for a generic x86-64 CPU give this machine's answers to
+    CPU_TOL. Compiling them takes its own 75 s or more (a cache folder of its own, so
+    this machine's cache is untouched)."""
+    path = tmp_path / "generic.npz"
+    env = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    code = f"import sys; sys.path[:0] = {[str(Path(__file__).parent)]!r}; " \
+           f"import test_determinism as t; t._dump({str(path)!r})"
+    subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=1800)
+    other = dict(np.load(path))
+    here = _cpu_results()
+    assert sorted(other) == sorted(here)
+    worst = {}
+    for key, a in here.items():
+        b = other[key]
+        assert a.shape == b.shape, key
+        if key.endswith("/events"):
+            assert a[0] == b[0], f"{key}: {a[0]} events here, {b[0]} there"
+            continue
+        scale = 1.0 if key.endswith("/v") else 1.0 + np.max(np.abs(a))
+        worst[key] = float(np.max(np.abs(a - b))) / scale
+    print("largest differences across CPUs:",
+          ", ".join(f"{k} {v:.1e}" for k, v in sorted(worst.items()) if v))
+    assert max(worst.values()) <= CPU_TOL, {k: v for k, v in worst.items() if v > CPU_TOL}

@@ -30,12 +30,15 @@ needs no excuse); the lines whose answer is steered by rounding (a near three-bo
 collision turns 1e-13 into 1e-9) are counted, as are those the reference cannot run
 (it gives up after 20,000 events or on a step it cannot take).
 
+Some lines also go through ``chainrun simulate`` (``test_lines_through_the_command``):
+exit status 0, no traceback, and the run file holds the library's run bit for bit.
+
 The default is a few hundred lines for ``make test``. A long run::
 
     CHAINRUN_FUZZ_EXAMPLES=10000 .venv/bin/python -m pytest -n 2 \
         tests/property/test_general_fuzz.py
 
-gives each of the two tests that many lines; the number tried and compared is printed
+gives each of the three tests that many lines; the number tried and compared is printed
 at the end (``fuzz: N cases tried``), and the lines that failed are printed in full.
 """
 
@@ -349,8 +352,9 @@ def _fuzz_settings(fast: int):
 def _finish(record_property, tried: int, counts: dict, failures: list,
             slowest: float) -> None:
     record_property("fuzz_cases", tried)
-    record_property("fuzz_detail", ", ".join(f"{n} {what}" for what, n in counts.items())
-                    + f"; the slowest run took {slowest:.2f} s")
+    if counts:
+        record_property("fuzz_detail", ", ".join(f"{n} {what}" for what, n in counts.items())
+                        + f"; the slowest run took {slowest:.2f} s")
     if failures:
         shown = "\n".join(f"- {why}\n  {doc!r}" for doc, why in failures[:20])
         pytest.fail(f"{len(failures)} of {tried} lines failed:\n{shown}", pytrace=False)
@@ -417,3 +421,38 @@ def test_lines_agree_with_the_reference(record_property):
 
     one()
     _finish(record_property, tried[0], counts, failures, slowest[0])
+
+
+def test_lines_through_the_command(record_property, tmp_path_factory):
+    """The same files through ``chainrun simulate``: exit 0, no traceback, and the run
+    file holds the library's run, bit for bit."""
+    from click.testing import CliRunner
+
+    from chainrun.cli import main
+    from chainrun.store import read_run
+
+    tried, failures = [0], []
+
+    @_fuzz_settings(30)
+    @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
+    def one(doc, times, t_end):
+        tried[0] += 1
+        try:
+            spec = with_times(doc, times, t_end)
+            folder = tmp_path_factory.mktemp("line")
+            config = folder / "line.toml"
+            config.write_text(spec.source_text)
+            result = CliRunner().invoke(main, ["simulate", str(config), "-o",
+                                               str(folder / "out")])
+            output = result.stdout + result.stderr
+            assert result.exit_code == 0 and "Traceback" not in output, output
+            stored = read_run(folder / "out" / "run.h5")
+            sol = run(spec, [0.0])
+            assert np.array_equal(stored.final_velocity, sol.final_velocity)
+            assert np.array_equal(stored.final_position, sol.final_position)
+            assert stored.outcome == sol.outcome.value
+        except Exception as exc:
+            failures.append((doc, f"{type(exc).__name__}: {exc}"))
+
+    one()
+    _finish(record_property, tried[0], {}, failures, 0.0)
