@@ -185,7 +185,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         def term(acc, i):
             return f"                {acc}{i} += w * W[c + {i}] * W[f + {i}]"
     lines = [
-        "@kernel(fastmath={\"contract\"})",
+        "@kernel",
         f"def {name}({args}):",
         f'    """{doc}"""',
         *([] if mixed else ["    a1 = alpha + 1.0"]),
@@ -268,7 +268,7 @@ def _linear(pt: int, tile: int) -> list[str]:
 def _bounds(pt: int, db: int) -> list[str]:
     """Bernstein bounds of every contact lane's compression over a series step."""
     lines = [
-        "@kernel(fastmath={\"contract\"})",
+        "@kernel",
         "def _series_bounds(W, nc, h):",
         '    """Bounds of every contact lane\'s compression over a series step [0, h].',
         "",

@@ -413,7 +413,7 @@ def _linear_orders(TX, W, G, MK, IM, nc, unit):
             _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
@@ -557,7 +557,7 @@ def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
         W[_tw(p, 24)] = TX[24, p] - TX[24, p + 1]
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
     """Orders 1 and up of the force series, each lane its own alpha (see _taylor)."""
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
@@ -732,7 +732,7 @@ def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
         W[_tw(p, 24)] = TX[24, p] - TX[24, p + 1]
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _series_bounds(W, nc, h):
     """Bounds of every contact lane's compression over a series step [0, h].
 

@@ -14,7 +14,12 @@ set, is where that folder goes; otherwise the user's cache folder.
 
 Entry points compile with LLVM's SLP vectoriser on (numba leaves it off by default):
 the series sums (``_series_orders``) write a tile's lanes out as scalars, which it
-packs into vector instructions. ``prepare`` compiles (or loads) an entry point before
+packs into vector instructions. No kernel takes ``fastmath`` flags, not even
+``contract``: a product and a sum fused into one multiply-add round once instead of
+twice, and only where the CPU has the instruction, so the answers would depend on the
+machine's CPU (by 1e-13 of the velocity scale on a random line). Without them a build
+for a generic x86-64 CPU gives this machine's answers bit for bit
+(``tests/property/test_determinism.py``), and the kernels are 1-2% slower. ``prepare`` compiles (or loads) an entry point before
 the clock of a run starts and tells the user on stderr when that means compiling.
 """
 

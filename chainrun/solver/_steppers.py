@@ -37,7 +37,7 @@ from chainrun.solver._state import (
 )
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _taylor(S):
     """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
 
@@ -163,14 +163,13 @@ def _series_impulse(S, lane, h):
     return (j + W[_tw(lane, f0)]) * h
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _taylor_step(S, h):
     """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
 
     Horner ball by ball, with the derivative's Horner beside it (v h + x, then
-    x h + T_k): the orders unroll and the balls' independent chains vectorise. Each
-    update has one product, which the compiler may fuse into a multiply-add or not, so
-    _taylor_end's evaluation of one ball is these numbers or within a rounding of them.
+    x h + T_k): the orders unroll and the balls' independent chains vectorise, and
+    _taylor_end's evaluation of one ball is these numbers.
     """
     m = S.ints[I_M]
     T, X, V = S.TX, S.X, S.V
@@ -191,10 +190,10 @@ def _taylor_step(S, h):
     return _taylor_error(S, h)
 
 
-@kernel(fastmath={"contract"})
+@kernel
 def _taylor_end(S, p, h):
     """(x, v) of compact ball p at the series step's end h: _taylor_step's evaluation
-    of the window for one ball (the same operations, each within a rounding)."""
+    of the window for one ball (the same operations)."""
     T = S.TX
     v = T[PT, p]
     x = v * h + T[PT - 1, p]
