@@ -498,7 +498,7 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         elif status == _state.ST_DEFECT:
             raise RuntimeError(
                 f"internal error: contact states did not settle at "
-                f"t = {S.fs[_state.F_T] * tscale!r} "
+                f"t = {float(S.fs[_state.F_T]) * tscale!r} "
                 f"({_window_text(S, P)}); please report this with the config")
         elif status == _state.ST_YIELD:
             if on_progress is not None:
