@@ -54,10 +54,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from chainrun.config import parse_experiment
-from chainrun.errors import ChainrunError
 from chainrun.materials import MATERIALS
 from chainrun.solver import Outcome, simulate_line, velocity_floor
 from chainrun.solver.restitution import LAWS
+from helpers import SETTLE_DEFECT
 from reference import line_energy, reference_line
 
 LONG = int(os.environ.get("CHAINRUN_FUZZ_EXAMPLES", "0") or 0)
@@ -82,6 +82,12 @@ TOL = {
 
 class Deadline(Exception):
     """A run took longer than ``TIME_BOUND``."""
+
+
+#: What a known solver defect's runs are counted as (not failures): it has a strict
+#: xfail test in tests/regression/test_general_model.py, which fails once the defect
+#: is fixed, and then this goes (``helpers.SETTLE_DEFECT``).
+KNOWN = f"known defect ({SETTLE_DEFECT}, test_general_model.py)"
 
 
 # --- drawing lines ---------------------------------------------------------------------
@@ -350,11 +356,10 @@ def _fuzz_settings(fast: int):
 
 
 def _finish(record_property, tried: int, counts: dict, failures: list,
-            slowest: float) -> None:
+            slowest: float | None = None) -> None:
     record_property("fuzz_cases", tried)
-    if counts:
-        record_property("fuzz_detail", ", ".join(f"{n} {what}" for what, n in counts.items())
-                        + f"; the slowest run took {slowest:.2f} s")
+    record_property("fuzz_detail", ", ".join(f"{n} {what}" for what, n in counts.items())
+                    + ("" if slowest is None else f"; the slowest run took {slowest:.2f} s"))
     if failures:
         shown = "\n".join(f"- {why}\n  {doc!r}" for doc, why in failures[:20])
         pytest.fail(f"{len(failures)} of {tried} lines failed:\n{shown}", pytrace=False)
@@ -371,7 +376,7 @@ def test_every_line_runs(record_property):
     """Every drawn line runs to its end, or stops with a named outcome, in time; every
     run that ends well balances momentum and energy (``check_run``)."""
     tried, failures, slowest = [0], [], [0.0]
-    counts = {"terminal": 0, "stopped at t_end": 0, "failed with a message": 0}
+    counts = {"terminal": 0, "stopped at t_end": 0, "failed with a message": 0, KNOWN: 0}
 
     @_fuzz_settings(300)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -381,7 +386,13 @@ def test_every_line_runs(record_property):
             spec = with_times(doc, times, t_end)
             sol = run(spec, slowest)
             check_run(spec.line, sol, spec.t_end)
-        except (AssertionError, ChainrunError, Deadline, Exception) as exc:
+        except RuntimeError as exc:
+            if SETTLE_DEFECT not in str(exc):
+                failures.append((doc, f"{type(exc).__name__}: {exc}"))
+                return
+            counts[KNOWN] += 1
+            return
+        except Exception as exc:
             failures.append((doc, f"{type(exc).__name__}: {exc}"))
             return
         counts[{Outcome.TERMINAL: "terminal", Outcome.STOP_TIME: "stopped at t_end"}.get(
@@ -398,7 +409,7 @@ def test_lines_agree_with_the_reference(record_property):
     ``TOL["reference"]`` (``compare``)."""
     tried, failures, slowest = [0], [], [0.0]
     counts = {"agreed": 0, "steered by rounding": 0, "reference failed": 0,
-              "not compared (too long for the quick run)": 0}
+              "not compared (too long for the quick run)": 0, KNOWN: 0}
 
     @_fuzz_settings(40)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -407,7 +418,13 @@ def test_lines_agree_with_the_reference(record_property):
         try:
             spec = with_times(doc, times, t_end)
             line = spec.line
-            sol = run(spec, slowest)
+            try:
+                sol = run(spec, slowest)
+            except RuntimeError as exc:
+                if SETTLE_DEFECT not in str(exc):
+                    raise
+                counts[KNOWN] += 1
+                return
             if not sol.outcome.ok:
                 raise AssertionError(f"{sol.outcome.value}: {sol.message}")
             if not LONG and sol.event_time.size > 40:
@@ -432,6 +449,7 @@ def test_lines_through_the_command(record_property, tmp_path_factory):
     from chainrun.store import read_run
 
     tried, failures = [0], []
+    counts = {"ran": 0, KNOWN: 0}
 
     @_fuzz_settings(30)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -445,7 +463,12 @@ def test_lines_through_the_command(record_property, tmp_path_factory):
             result = CliRunner().invoke(main, ["simulate", str(config), "-o",
                                                str(folder / "out")])
             output = result.stdout + result.stderr
-            assert result.exit_code == 0 and "Traceback" not in output, output
+            assert "Traceback" not in output, output
+            if result.exit_code == 1 and SETTLE_DEFECT in output:
+                counts[KNOWN] += 1
+                return
+            assert result.exit_code == 0, output
+            counts["ran"] += 1
             stored = read_run(folder / "out" / "run.h5")
             sol = run(spec, [0.0])
             assert np.array_equal(stored.final_velocity, sol.final_velocity)
@@ -455,4 +478,4 @@ def test_lines_through_the_command(record_property, tmp_path_factory):
             failures.append((doc, f"{type(exc).__name__}: {exc}"))
 
     one()
-    _finish(record_property, tried[0], {}, failures, 0.0)
+    _finish(record_property, tried[0], counts, failures)
