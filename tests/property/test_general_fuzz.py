@@ -2,11 +2,12 @@
 
 Hypothesis draws experiment files of any line the model describes (``general_lines``):
 1 to 12 balls; masses, stiffnesses and exponents (1 to 3) per contact; gaps and
-overlaps; strikers of any mass and speed, head-on; walls on either side, elastic or
-damped; constant forces and a precompression (with ``solver.t_end``); every damping
-law, given as a damping or as a restitution; in SI, materials and diameters. Each
-file is read as ``chainrun simulate`` reads it (``parse_experiment``), and its line run
-as a run runs it (``simulate_line`` with the file's settings), with snapshots.
+overlaps; strikers of any mass and speed, head-on, or none (a line at rest); walls on
+either side, elastic or damped; constant forces and a precompression, against a wall
+or between two (with ``solver.t_end``); every damping law, given as a damping or as a
+restitution; in SI, materials and diameters. Each file is read as ``chainrun
+simulate`` reads it (``parse_experiment``), and its line run as a run runs it
+(``simulate_line`` with the file's settings), with snapshots.
 
 Every drawn file is valid, and every run must reach its terminal state or its
 ``t_end`` within ``TIME_BOUND`` seconds, or stop with a named outcome and a one-line
@@ -167,10 +168,10 @@ def general_lines(draw):
         if si:
             chain["gap"] = [g * 1e-4 for g in chain["gap"]]  # 0.1 mm .. 50 um
     how = draw(st.sampled_from(["strikers", "strikers", "head-on", "velocities"]))
-    if how == "strikers":
-        chain["k"] = draw(st.integers(1, n))
+    if how == "strikers":  # k = 0: a line at rest (moved by its overlaps or forces)
+        chain["k"] = draw(st.integers(0, n))
         speed = draw(speeds) * draw(st.sampled_from([1.0, 1.0, 1.0, -1.0]))
-        if speed != 1.0 or draw(st.booleans()):
+        if chain["k"] and (speed != 1.0 or draw(st.booleans())):
             chain["speed"] = speed
     elif how == "head-on":
         v = [0.0] * n
@@ -205,8 +206,14 @@ def general_lines(draw):
     if load == "force":
         scale = 0.05 if si else 0.5
         chain["force"] = _per(draw, n, st.floats(-scale, scale))
-    elif (load == "precompression" and "right" in walls and how == "strikers"
-          and chain["k"] < n):
+    elif load == "precompression" and "right" in walls and how == "strikers" \
+            and chain["k"] < n:
+        # against the right wall, the balls after the strikers at rest; between two
+        # walls, every ball at rest and the left wall placed by the load
+        if "left" in walls:
+            chain["k"] = 0
+            chain.pop("speed", None)
+            walls["left"].pop("gap", None)
         chain["precompression"] = draw(st.floats(0.01, 1.0) if not si else
                                        _log_uniform(0.01, 10.0))
     return doc
