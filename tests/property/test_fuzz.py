@@ -344,7 +344,9 @@ def assert_usable(exp: Experiment) -> None:
     assert specs and len({s.run_id for s in specs}) == len(specs)
     for spec in specs:
         assert RUN_ID.fullmatch(spec.run_id), spec.run_id
-        assert 1 <= spec.k <= spec.n < 2**63 and 1 <= spec.alpha < math.inf
+        assert 0 <= spec.k <= spec.n < 2**63  # k = 0: a line at rest
+        # alpha: NaN where the contacts' exponents differ, or there is no contact
+        assert math.isnan(spec.alpha) or 1 <= spec.alpha < math.inf
         times = spec.times
         assert all(math.isfinite(t) and t >= 0 for t in times)
         assert all(a <= b for a, b in zip(times[:-1], times[1:]))
