@@ -167,3 +167,21 @@ def test_damping_for_restitution_on_arrays():
     # Kuwabara-Kono is speed-free at alpha = 2 (beta = 1/2 = (alpha - 1)/2)
     eta = r.damping_for_restitution(0.7, "kuwabara-kono", 1.0, 2.0, 1.0)
     assert r.restitution(eta, 0.5, 1.0, 2.0, 1.0, 123.0) == pytest.approx(0.7, abs=1e-10)
+
+
+@pytest.mark.parametrize("law", ["dashpot", "kuwabara-kono", "tsuji"])
+@pytest.mark.parametrize("alpha", [1.0, 1.5, 2.1367658714971833, 3.0])
+@pytest.mark.parametrize("e", [1 - 1e-16, 1 - 1e-12, 1 - 1.0001e-9, 1 - 0.9999e-9])
+def test_restitution_within_rounding_of_one(law, alpha, e):
+    # The integration's e is accurate to ~1e-12, so it cannot find a damping for
+    # 1 - e below that (the fuzzer's e = 0.9999999999999999 made it fail); the first
+    # order in the damping does. Either way the damping gives e back to that accuracy,
+    # and it is continuous where one method hands over to the other.
+    k, mu, v = 1.0, 0.5, 1.0
+    eta = r.damping_for_restitution(e, law, k, alpha, mu, v)
+    assert eta > 0.0
+    beta = r.law_exponent(law, alpha)
+    assert r.restitution(eta, beta, k, alpha, mu, v) == pytest.approx(e, abs=3e-12)
+    if e == 1 - 1.0001e-9:
+        below = r.damping_for_restitution(1 - 0.9999e-9, law, k, alpha, mu, v)
+        assert below / eta == pytest.approx(0.9999e-9 / 1.0001e-9, rel=2e-3)
