@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+from hypothesis import settings
 
 # --- kinds: a test's folder is its marker -------------------------------------------------
 # tests/unit, tests/property, tests/regression and tests/integration hold the tests of each
@@ -18,6 +21,16 @@ def pytest_collection_modifyitems(items):
         folder = path.relative_to(TESTS).parts[0] if path.is_relative_to(TESTS) else None
         if folder in KINDS:
             item.add_marker(folder)
+
+
+# --- fuzzing: the same draws on every run of the suite -----------------------------------
+# Under ``make test`` (and CI) hypothesis draws the same cases every time, so that a run
+# fails only for a change in the code; a long run (``CHAINRUN_FUZZ_EXAMPLES``, the guide's
+# Accuracy section) draws new ones, to explore. The fuzzers' own ``settings(...)`` take
+# every option they do not name from the profile loaded here.
+settings.register_profile("suite", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("explore" if os.environ.get("CHAINRUN_FUZZ_EXAMPLES") else "suite")
 
 
 # --- fuzzing: report the number of cases tried (tests/property/test_fuzz.py) --------------

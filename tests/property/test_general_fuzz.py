@@ -34,7 +34,8 @@ collision turns 1e-13 into 1e-9) are counted, as are those the reference cannot 
 Some lines also go through ``chainrun simulate`` (``test_lines_through_the_command``):
 exit status 0, no traceback, and the run file holds the library's run bit for bit.
 
-The default is a few hundred lines for ``make test``. A long run::
+The default is a few hundred lines for ``make test``, the same ones on every run (the
+suite's hypothesis profile, ``conftest.py``). A long run draws new ones::
 
     CHAINRUN_FUZZ_EXAMPLES=10000 .venv/bin/python -m pytest -n 2 \
         tests/property/test_general_fuzz.py
