@@ -140,6 +140,12 @@ def _variables(run) -> tuple[dict, dict]:
         data["material"] = ("ball", np.asarray(line.material, dtype=str),
                             {"long_name": "material of each sphere ('': constants given "
                                           "explicitly)"}, None)
+    if run.check is not None:
+        for name, what in (("final", "final velocity"), ("separation", "separation velocity")):
+            data[f"{name}_velocity_spread"] = (
+                "ball", np.asarray(getattr(run.check, f"{name}_velocity_spread")),
+                {"long_name": f"|difference| of the {what} between the run and its check "
+                              f"at rtol {run.check.rtol:g} (chainrun.check)"}, "velocity")
     if run.sensor_balls.size:
         coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
                    "side": ("side", ["towards ball 1", "away from ball 1"])}
@@ -176,7 +182,9 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     ``wall_damping_exponent`` (NaN where there is no wall) and what they did,
     ``wall_impulse`` and ``wall_dissipation`` (wall); the results: ``final_position``,
     ``final_velocity``, ``separation_time``, ``separation_velocity`` (ball),
-    ``contact_dissipation`` (contact); the event log ``event_time``, ``event_contact``
+    ``contact_dissipation`` (contact); for a checked run (``--check``),
+    ``final_velocity_spread`` and ``separation_velocity_spread`` (ball), the attribute
+    ``check_rtol`` and the check's outcome; the event log ``event_time``, ``event_contact``
     (the contact's number, 0 and N for the walls) and ``event_kind`` (event); with
     sensors, ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``.
     Every quantity has its ``units``: SI (s, m, m/s, kg, N, J, ...) for a run in SI,
@@ -207,6 +215,8 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
         **{f"scales_{k}": v for k, v in scales.items()},
+        **({"check_rtol": run.check.rtol, "check_outcome": run.check.outcome}
+           if run.check is not None else {}),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
@@ -308,13 +318,18 @@ def _plain(value):
     raise TypeError(f"cannot use a {type(value).__name__} in an experiment")
 
 
-def simulate(config=None, /, **tables) -> "xarray.Dataset | xarray.DataTree":  # noqa: F821
+def simulate(config=None, /, *, check: bool = False,
+             **tables) -> "xarray.Dataset | xarray.DataTree":  # noqa: F821
     """Run an experiment and return its run as an ``xarray.Dataset`` (see ``open_run``).
 
     Parameters
     ----------
     config : path or dict, optional
         An experiment file (``.toml``, ``.yaml``), or its tables as a dict.
+    check : bool
+        Check every run, as ``chainrun simulate --check`` (or ``solver={"check":
+        True}``): run it again at a tenth of its tolerance; the Dataset then has
+        ``final_velocity_spread`` and ``separation_velocity_spread``.
     **tables
         Tables of the experiment file as keyword arguments (``chain=``, ``output=``,
         ``solver=``, ``sweep=``, ``name=``), added to a dict ``config``.
@@ -334,10 +349,10 @@ def simulate(config=None, /, **tables) -> "xarray.Dataset | xarray.DataTree":  #
     import xarray as xr
 
     from chainrun.errors import ChainrunError
-    from chainrun.runner import run_file, simulate_run
+    from chainrun.runner import run_file, simulate_run, sweep_specs
 
     experiment = _experiment(config, tables)
-    specs = experiment.runs()
+    specs = sweep_specs(experiment, check=check)
     with tempfile.TemporaryDirectory(prefix="chainrun-") as tmp:
         out = {}
         for spec in specs:

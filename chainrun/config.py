@@ -30,6 +30,7 @@ The schema (TOML shown; YAML has the same structure)::
     t_end = 100.0                    # default: run to the terminal state
     rtol = 1e-12                     # in [1e-15, 1e-3]
     max_events = 1000000             # default: no limit
+    check = false                    # true: run again at a tenth of rtol, store the spreads
     [sweep]                          # optional: the cartesian product of the lists
     "chain.k" = [1, 2, 3, 4]         # at most MAX_RUNS runs, MAX_SNAPSHOTS snapshots in all
 
@@ -70,6 +71,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from chainrun import generators
+from chainrun.check import MIN_RTOL, check_rtol
 from chainrun.errors import ConfigError, one_line, show_value
 from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
@@ -119,6 +121,10 @@ class RunSpec:
         The run's chain (sweep values applied); None for the paper's line, which
         ``n``, ``k`` and ``alpha`` describe whole.
     walls : Walls or None
+    check : bool
+        Whether to run the line a second time at ``chainrun.check.check_rtol(rtol)``
+        and store the spread of each ball's velocities (``solver.check``, or the
+        command's ``--check``); not part of ``config`` nor of its hash.
 
     For a general line, ``k`` is the number of leading balls that move and ``alpha``
     the contacts' exponent, NaN when it varies: what summaries show. The line itself
@@ -144,6 +150,14 @@ class RunSpec:
     units: str = "paper"
     chain: Any = None
     walls: Any = None
+    check: bool = False
+
+    def for_check(self) -> "RunSpec":
+        """The check's run of this one: the same line at ``check_rtol(rtol)``, with
+        its own resolved configuration and hash (and no check of its own)."""
+        config = checked_config(self.config)
+        return replace(self, rtol=config["solver"]["rtol"], config=config,
+                       config_hash=config_hash(config), check=False)
 
     @property
     def line(self) -> Line:
@@ -373,6 +387,12 @@ def _check_float(value: Any) -> float:
     raise _fail([_Issue(f"expected a number, got {show_value(value)}{hint}")])
 
 
+def _check_bool(value: Any) -> bool:
+    if isinstance(value, bool):
+        return value
+    raise _fail([_Issue(f"expected true or false, got {show_value(value)}")])
+
+
 def _check_str(value: Any) -> str:
     if isinstance(value, str):
         return value
@@ -386,6 +406,7 @@ def _none_or(check):
 _Int = Annotated[int, BeforeValidator(_check_int)]
 _Float = Annotated[float, BeforeValidator(_check_float)]
 _OptInt = Annotated[int | None, BeforeValidator(_none_or(_check_int))]
+_Bool = Annotated[bool, BeforeValidator(_check_bool)]
 _OptFloat = Annotated[float | None, BeforeValidator(_none_or(_check_float))]
 
 _SCALAR_CHECKS = {int: _check_int, float: _check_float}
@@ -1073,16 +1094,21 @@ class Output(BaseModel):
 
 
 class SolverSettings(BaseModel):
-    """How to run: an optional stop time, step accuracy and event limit.
+    """How to run: an optional stop time, step accuracy and event limit, and whether
+    to check which digits of the answer hold.
 
     ``t_end = None`` runs to the terminal state (no contact can ever close again).
+    ``check`` runs each line a second time at ``chainrun.check.check_rtol(rtol)`` and
+    stores the spread of every ball's velocities; it adds a measurement, not another
+    answer, so it is left out of the run's resolved configuration and its hash.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     t_end: _OptFloat = Field(None, gt=0)
-    rtol: _Float = Field(DEFAULT_RTOL, ge=1e-15, le=1e-3)
+    rtol: _Float = Field(DEFAULT_RTOL, ge=MIN_RTOL, le=1e-3)
     max_events: _OptInt = Field(None, gt=0)
+    check: _Bool = False
 
 
 #: A generator table's numeric keys that a sweep may vary, ``"chain.<key>.<field>"``
@@ -1287,6 +1313,20 @@ def _set_key(data: dict[str, Any], dotted: str, value: Any) -> None:
     data[head] = inner
 
 
+def checked_config(config: dict[str, Any]) -> dict[str, Any]:
+    """A run's resolved ``config`` with ``solver.rtol`` at its check's tolerance
+    (``chainrun.check.check_rtol``): the configuration of its check run."""
+    solver = config.get("solver") or {}
+    rtol = check_rtol(solver.get("rtol", DEFAULT_RTOL))
+    return {**config, "solver": {**solver, "rtol": rtol}}
+
+
+def config_hash(config: dict[str, Any]) -> str:
+    """sha256 (hex) of a run's resolved ``config``, as ``RunSpec.config_hash``."""
+    return hashlib.sha256(json.dumps(config, sort_keys=True, separators=(",", ":"))
+                          .encode()).hexdigest()
+
+
 def _canonical_json(config: dict[str, Any], times_json: str) -> str:
     """``json.dumps(config, sort_keys=True, separators=(",", ":"))``, with the (long) list
     ``config["output"]["times"]`` given already serialised as ``times_json``.
@@ -1462,7 +1502,7 @@ class Experiment(BaseModel):
                 lines = [one_line(f"{label}{p.line()}") for p in problems]
                 raise ConfigError(self._source or self.name, lines)
             config = {**data, "chain": chain.model_dump(exclude_none=True),
-                      "solver": solver.model_dump()}
+                      "solver": solver.model_dump(exclude={"check"})}
             if walls.left is not None or walls.right is not None:
                 config["walls"] = walls.model_dump(exclude_none=True)
             canonical = _canonical_json(config, times_json)
@@ -1489,6 +1529,7 @@ class Experiment(BaseModel):
                     chain=None if chain.is_paper and walls == Walls() and self.units == "paper"
                     else chain,
                     walls=walls,
+                    check=solver.check,
                 )
             )
         return specs

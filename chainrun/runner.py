@@ -36,6 +36,7 @@ from typing import Callable
 import numpy as np
 
 from chainrun import atomic
+from chainrun.check import Check
 from chainrun.config import Experiment, RunSpec
 from chainrun.errors import ChainrunError, StoreError
 
@@ -83,9 +84,12 @@ class RunSummary:
     skipped: bool = False
     dissipated: float = 0.0  # share of the impact energy the damping took
     units: str = "paper"  # the run's units: "paper" or "si"
+    check: Check | None = None  # the conditioning check, if the run had one
+    speed: float = 1.0  # the line's impact speed (largest initial speed)
 
     def line(self) -> str:
-        """One line: how the run ended, its cost and its conservation errors."""
+        """One line: how the run ended, its cost and its conservation errors (and,
+        for a checked run, how many balls hold to ``chainrun.check.HOLD``)."""
         from chainrun.units import format_value
 
         end = format_value(self.end_time, "time", self.units, 6)
@@ -99,7 +103,8 @@ class RunSummary:
                 f"{momentum_text(self.momentum_error)}, |dE|/E = {self.energy_error:.1e}, "
                 + (f"dissipated {self.dissipated:.1%} of the impact energy, "
                    if self.dissipated else "")
-                + f"{self.wall_time:.2f} s")
+                + f"{self.wall_time:.2f} s"
+                + (f"; {self.check.line(self.speed)}" if self.check is not None else ""))
         if self.skipped:
             return f"{self.run_id}: skipped, file up to date ({text})"
         return f"{self.run_id}: {text}"
@@ -192,11 +197,19 @@ def run_file(outdir: Path, spec: RunSpec) -> Path:
     return Path(outdir) / f"{spec.run_id}.h5"
 
 
-def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = None) -> RunSummary:
+def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = None,
+                 check_outdir=None) -> RunSummary:
     """Run one spec and write its run file atomically; return its summary.
 
     This is the task a worker executes: it needs only the spec and a folder it can
     write to (the same path on every machine of a cluster).
+
+    With ``spec.check``, a run that succeeds is run a second time at
+    ``chainrun.check.check_rtol(spec.rtol)`` and its file stores the spread of each
+    ball's velocities between the two (``chainrun.check``). With ``check_outdir``
+    (which implies the check), the check run writes its own whole run file there
+    (``spec.for_check()``: snapshots, events, sensors), so that any number derived
+    from the runs can be computed from both.
     """
     from chainrun.limits import check_memory
     from chainrun.solver import load_kernels, simulate_line, velocity_floor
@@ -214,7 +227,10 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
             max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
             sensors=spec.sensors, sensor_dt=spec.sensor_dt, sensor_end=spec.sensor_end,
         )
-        writer.finish(sol)
+        check = None
+        if (spec.check or check_outdir is not None) and sol.outcome.ok:
+            check = _check(spec, line, sol, check_outdir, hook)
+        writer.finish(sol, check)
     d = sol.diagnostics
     return RunSummary(
         run_id=spec.run_id, file=path.name, n=spec.n, k=spec.k, alpha=spec.alpha,
@@ -224,7 +240,39 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
         dissipated=_share(sol.dissipated_energy, line), units=spec.units,
+        check=check, speed=_speed(line),
     )
+
+
+def _check(spec: RunSpec, line, sol, check_outdir, hook) -> Check:
+    """Run ``spec``'s line again at its check's tolerance; the spreads against ``sol``.
+
+    Snapshots and sensor samples do not change a run's steps (the solver evaluates
+    them on its dense output), so a check run without them, as one with a
+    ``check_outdir``, follows the trajectory it would with them.
+    """
+    from chainrun.solver import simulate_line, velocity_floor
+    from chainrun.store import RunWriter
+
+    checked = spec.for_check()
+    args = dict(t_end=checked.t_end, rtol=checked.rtol, max_events=checked.max_events,
+                on_progress=hook)
+    if check_outdir is None:
+        other = simulate_line(line, **args)
+    else:
+        Path(check_outdir).mkdir(parents=True, exist_ok=True)
+        with RunWriter(run_file(Path(check_outdir), checked), checked,
+                       velocity_floor=velocity_floor(checked.rtol)) as writer:
+            other = simulate_line(line, checked.times, on_snapshot=writer.snapshot,
+                                  sensors=checked.sensors, sensor_dt=checked.sensor_dt,
+                                  sensor_end=checked.sensor_end, **args)
+            writer.finish(other)
+    return Check.between(sol, other, checked.rtol)
+
+
+def _speed(line) -> float:
+    """The line's impact speed: its largest initial speed (1 for a line at rest)."""
+    return float(np.max(np.abs(line.velocity), initial=0.0)) or 1.0
 
 
 def _share(dissipated: float, line) -> float:
@@ -255,6 +303,7 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
         dissipated=_share(run.dissipated_energy, run.line), units=run.units,
+        check=run.check, speed=_speed(run.line),
     )
 
 
@@ -281,27 +330,60 @@ class SweepPlan:
     conflicts: list[Path] = field(default_factory=list)
 
 
-def plan_sweep(experiment: Experiment, outdir) -> SweepPlan:
-    """Compare the runs of ``experiment`` with the run files in ``outdir``."""
+def sweep_specs(experiment: Experiment, *, check: bool = False,
+                check_outdir=None) -> list[RunSpec]:
+    """The runs of ``experiment``, each checked if ``check`` or ``check_outdir`` asks
+    (``RunSpec.check``; ``solver.check`` in the file asks for it too)."""
+    specs = experiment.runs()
+    if check or check_outdir is not None:
+        specs = [replace(spec, check=True) for spec in specs]
+    return specs
+
+
+def plan_sweep(experiment: Experiment, outdir, *, check: bool = False,
+               check_outdir=None) -> SweepPlan:
+    """Compare the runs of ``experiment`` with the run files in ``outdir``.
+
+    A file of the run's config is done unless the run asks for a check the file does
+    not hold, or ``check_outdir`` lacks the check run's own file: such a run is
+    computed again (both runs), not reported as a conflict.
+    """
     from chainrun.store import run_config_hash
 
     outdir = Path(outdir)
     plan = SweepPlan()
-    for spec in experiment.runs():
+    for spec in sweep_specs(experiment, check=check, check_outdir=check_outdir):
         path = run_file(outdir, spec)
         if not path.exists():
             plan.todo.append(spec)
             continue
         if run_config_hash(path) == spec.config_hash:
             try:
-                plan.done[spec.run_id] = read_summary(path, spec)
-                continue
+                summary = read_summary(path, spec)
             except StoreError:  # our hash but damaged elsewhere: the same run, recompute
-                pass
+                summary = None
+            if summary is not None and _has_check(summary, spec, check_outdir):
+                plan.done[spec.run_id] = summary
+                continue
         else:
             plan.conflicts.append(path)
         plan.todo.append(spec)
     return plan
+
+
+def _has_check(summary: RunSummary, spec: RunSpec, check_outdir) -> bool:
+    """Whether an existing run file holds the check its spec asks for (a failed run
+    has none to hold)."""
+    from chainrun.store import run_config_hash
+
+    if not spec.check or not summary.ok:
+        return True
+    if summary.check is None:
+        return False
+    if check_outdir is None:
+        return True
+    checked = spec.for_check()
+    return run_config_hash(run_file(Path(check_outdir), checked)) == checked.config_hash
 
 
 def partial_files(outdir, specs: list[RunSpec]) -> list[Path]:
@@ -565,6 +647,8 @@ def simulate_experiment(
     outdir,
     *,
     force: bool = False,
+    check: bool = False,
+    check_outdir=None,
     jobs: int | None = None,
     scheduler: str | None = None,
     scheduler_file=None,
@@ -590,6 +674,13 @@ def simulate_experiment(
         Replace run files that hold another config (or are not chainrun run files);
         without it such files are an error and nothing is run. Files that match are
         skipped either way.
+    check : bool
+        Check every run (as ``solver.check = true`` does): run it a second time at
+        ``chainrun.check.check_rtol(rtol)`` and store each ball's spreads. A file of
+        the run's config without them is computed again.
+    check_outdir : path-like, optional
+        Check every run, and write each check run's own file into this folder, with
+        its index (``chainrun analyze --check`` reads them).
     jobs, scheduler, scheduler_file
         Where to compute; see ``open_executor``.
     executor : concurrent.futures.Executor, optional
@@ -620,8 +711,10 @@ def simulate_experiment(
     check_placement(jobs=jobs, scheduler=scheduler, scheduler_file=scheduler_file)
     shown = Path(outdir)
     outdir = shown.absolute()  # the same folder for workers in other working folders
-    specs = experiment.runs()
-    plan = plan_sweep(experiment, outdir)
+    if check_outdir is not None:
+        check_outdir = Path(check_outdir).absolute()
+    specs = sweep_specs(experiment, check=check, check_outdir=check_outdir)
+    plan = plan_sweep(experiment, outdir, check=check, check_outdir=check_outdir)
     if plan.conflicts and not force:
         names = ", ".join(p.name for p in plan.conflicts[:4])
         more = f" and {len(plan.conflicts) - 4} more" if len(plan.conflicts) > 4 else ""
@@ -673,7 +766,8 @@ def simulate_experiment(
     workers = getattr(executor, "workers", type(executor).__name__) if plan.todo else ""
     try:
         if plan.todo:
-            _execute(executor, plan.todo, outdir, report, update, on_progress)
+            _execute(executor, plan.todo, outdir, report, update, on_progress,
+                     check_outdir)
     except BaseException:
         if own:
             executor.shutdown(wait=False, cancel_futures=True)
@@ -681,7 +775,11 @@ def simulate_experiment(
     if own:
         executor.shutdown()
 
-    for path in partial_files(outdir, specs):
+    checked = [s.for_check() for s in specs]
+    leftovers = partial_files(outdir, specs)
+    if check_outdir is not None:
+        leftovers += partial_files(check_outdir, checked)
+    for path in leftovers:
         try:
             path.unlink()
         except OSError:
@@ -690,11 +788,30 @@ def simulate_experiment(
     index = outdir / INDEX_NAME
     entries = [r.index_entry() for r in runs if isinstance(r, RunSummary)]
     write_index(index, experiment.name, entries)
+    if check_outdir is not None:
+        _write_check_index(check_outdir, experiment.name, checked)
     return SweepResult(runs=runs, index=index, workers=workers)
 
 
+def _write_check_index(check_outdir: Path, name: str, checked: list[RunSpec]) -> None:
+    """The index of the check runs' own files (those written: a run that failed has
+    no check run)."""
+    from chainrun.store import run_config_hash, write_index
+
+    entries = []
+    for spec in checked:
+        path = run_file(check_outdir, spec)
+        if run_config_hash(path) == spec.config_hash:
+            try:
+                entries.append(read_summary(path, spec).index_entry())
+            except StoreError:
+                continue
+    if entries or check_outdir.is_dir():
+        write_index(check_outdir / INDEX_NAME, name, entries)
+
+
 def _execute(executor: cf.Executor, todo: list[RunSpec], outdir: Path, report, update,
-             on_progress: ProgressHook | None) -> None:
+             on_progress: ProgressHook | None, check_outdir: Path | None = None) -> None:
     """Submit every run, then report each as it finishes, in completion order."""
     inline = isinstance(executor, InlineExecutor)
     finished: queue.SimpleQueue = queue.SimpleQueue()
@@ -732,9 +849,10 @@ def _execute(executor: cf.Executor, todo: list[RunSpec], outdir: Path, report, u
         outstanding += 1
         if inline:
             update(running=1, current=spec.run_id)
-            future = executor.submit(simulate_run, spec, outdir, on_progress=on_progress)
+            future = executor.submit(simulate_run, spec, outdir, on_progress=on_progress,
+                                     check_outdir=check_outdir)
         else:
-            future = executor.submit(simulate_run, spec, outdir)
+            future = executor.submit(simulate_run, spec, outdir, check_outdir=check_outdir)
         pending[future] = spec
         future.add_done_callback(finished.put)
         drain(None)
@@ -758,8 +876,9 @@ def _describe(exc: BaseException) -> str:
 def velocity_table(summaries: list[RunSummary], max_balls: int = 20) -> str | None:
     """The velocities where the runs ended as a text table (balls down, runs across),
     under a heading with their unit, for short lines: final velocities where every
-    run reached its terminal state."""
-    from chainrun.units import scale_for
+    run reached its terminal state; a checked run's with no digit beyond its spread
+    (``chainrun.units.supported_format``)."""
+    from chainrun.units import scale_for, supported_format
 
     if (not summaries or any(s.n != summaries[0].n for s in summaries)
             or len({s.units for s in summaries}) > 1):
@@ -771,9 +890,14 @@ def velocity_table(summaries: list[RunSummary], max_balls: int = 20) -> str | No
                        np.concatenate([s.final_velocity for s in summaries]))
     what = ("final velocities" if all(s.terminal for s in summaries)
             else "velocities where the runs stopped")
+
+    def cell(s: RunSummary, i: int) -> str:
+        spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
+        return supported_format(".4f", float(scaled(s.final_velocity[i])),
+                                float(scaled(spread)))
+
     head = ["n"] + [s.run_id for s in summaries]
-    rows = [[str(i + 1)] + [f"{scaled(s.final_velocity[i]):.4f}" for s in summaries]
-            for i in range(n)]
+    rows = [[str(i + 1)] + [cell(s, i) for s in summaries] for i in range(n)]
     widths = [max(len(r[c]) for r in [head] + rows) for c in range(len(head))]
     fmt = lambda r: "  ".join(v.rjust(w) for v, w in zip(r, widths))
     return "\n".join([f"{what} ({scaled.unit})", fmt(head)] + [fmt(r) for r in rows])

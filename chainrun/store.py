@@ -45,6 +45,7 @@ import numpy as np
 
 import chainrun
 from chainrun import atomic
+from chainrun.check import Check
 from chainrun.errors import StoreError
 from chainrun.solver import EventKind, Line, Solution, Wall
 from chainrun.solver import physics
@@ -672,12 +673,15 @@ class RunWriter:
             element.flush()
         self._pending_bytes = 0
 
-    def finish(self, solution: Solution) -> None:
-        """Write results, events and diagnostics; close; rename to ``path``."""
+    def finish(self, solution: Solution, check: Check | None = None) -> None:
+        """Write results, events and diagnostics (and the ``check``'s spreads, if
+        given); close; rename to ``path``."""
         h5 = self._live()
         try:
             self._flush()
             self._write_solution(h5, solution)
+            if check is not None:
+                self._write_check(h5, check)
             self._h5 = None
             _commit(h5, self.temp_path, self.path)
         except BaseException:
@@ -757,6 +761,27 @@ class RunWriter:
             sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
             sensors.attrs["end"] = np.float64(np.nan if self._spec.sensor_end is None
                                               else self._spec.sensor_end)
+
+    def _write_check(self, h5: h5py.File, check: Check) -> None:
+        """The conditioning check (``chainrun.check``): the spread of every ball's final
+        and separation velocity between the run and its check at ``check.rtol``."""
+        results, n = h5["results"], self._n
+        ball = results["ball"]
+        for name, what in (("final_velocity", "final velocity"),
+                           ("separation_velocity", "separation velocity (0: NaN in "
+                                                   "both runs; inf: NaN in one)")):
+            data = np.asarray(getattr(check, f"{name}_spread"), dtype=np.float64)
+            if data.shape != (n,):
+                raise StoreError(f"{self.path}: {name}_spread has shape {data.shape}, "
+                                 f"expected ({n},)")
+            ds = _array(results, f"{name}_spread", data, [ball],
+                        f"|difference| of the {what} between the run and its check "
+                        "run at check_rtol")
+            ds.attrs["unit"] = UNITS[self._units]["velocity"]
+        results.attrs["check_rtol"] = np.float64(check.rtol)
+        results.attrs["check_outcome"] = str(check.outcome)
+        results.attrs["check_message"] = str(check.message)
+        h5["diagnostics"].attrs["check_wall_time"] = np.float64(check.wall_time)
 
     def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution,
                            wall: h5py.Dataset) -> None:
@@ -934,6 +959,10 @@ class RunData:
     wall_impulse : ndarray, shape (2,)
         The impulse the left and right walls gave the line by ``end_time`` (+x towards
         ball N; 0 where there is no wall).
+    check : chainrun.check.Check or None
+        The conditioning check (``solver.check``, ``--check``): the check run's
+        tolerance, outcome and time, and the spread of each ball's final and separation
+        velocity; None for a run without one.
     """
 
     path: Path
@@ -967,6 +996,7 @@ class RunData:
     contact_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     wall_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
     wall_impulse: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
+    check: Check | None = None
 
     @property
     def n(self) -> int:
@@ -1122,6 +1152,7 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         terminal=bool(_attr(res, "terminal")),
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
         model=_read_model(h5),
+        check=_read_check(res, diag),
         **_read_sensors(h5),
         **_read_walls(res, int(params["n"]), version),
     )
@@ -1166,6 +1197,18 @@ def _read_model(h5: h5py.File) -> dict[str, Any] | None:
                       for side in ("left", "right") if side in walls}
     model["scales"] = {key: float(value) for key, value in _get(group, "scales").attrs.items()}
     return model
+
+
+def _read_check(res: h5py.Group, diag: h5py.Group) -> Check | None:
+    """The conditioning check, if the run had one (optional datasets of ``results``)."""
+    if "final_velocity_spread" not in res:
+        return None
+    return Check(rtol=float(_attr(res, "check_rtol")),
+                 outcome=_as_str(_attr(res, "check_outcome")),
+                 message=_as_str(res.attrs.get("check_message", "")),
+                 wall_time=float(diag.attrs.get("check_wall_time", np.nan)),
+                 final_velocity_spread=_get(res, "final_velocity_spread")[()],
+                 separation_velocity_spread=_get(res, "separation_velocity_spread")[()])
 
 
 def _read_sensors(h5: h5py.File) -> dict:
@@ -1360,6 +1403,10 @@ class AnalysisData:
         Named derived numbers, e.g. ``{"ejected_1": 0.98568}`` (NaN allowed).
     descriptions : dict of str to str
         One line per value: what it is and how it was computed.
+    spreads : dict of str to float
+        Each value's spread, ``|value - the same value from the check runs|`` (the
+        runs again at ``chainrun.check.check_rtol``; ``chainrun analyze --check``):
+        empty for an analysis without a check; 0 where both are NaN or equal.
     arrays : dict of str to ndarray
         Arrays by slash-separated path, e.g. ``"series/t=13.5/x"``; numeric or str.
     attrs : dict of str to dict
@@ -1390,6 +1437,7 @@ class AnalysisData:
     format_version: int = ANALYSIS_FORMAT_VERSION
     created: str = ""
     creator_version: str = ""
+    spreads: dict[str, float] = dataclasses.field(default_factory=dict)
 
     def children(self, group: str) -> list[str]:
         """Names of the sub-groups of ``group`` (e.g. the series), in the order written."""
@@ -1451,6 +1499,8 @@ def write_analysis(path, data: AnalysisData) -> None:
         for key, value in data.values.items():
             ds = values.create_dataset(key, data=np.float64(value))
             ds.attrs["description"] = str(data.descriptions.get(key, ""))
+            if key in data.spreads:
+                ds.attrs["spread"] = np.float64(data.spreads[key])
 
         arrays = _group(h5, "data")
         for key in dict.fromkeys(list(data.attrs) + [k.rsplit("/", 1)[0] for k in data.arrays
@@ -1498,9 +1548,12 @@ def read_analysis(path) -> AnalysisData:
         try:
             values: dict[str, float] = {}
             descriptions: dict[str, str] = {}
+            spreads: dict[str, float] = {}
             for key, ds in _get(h5, "values").items():
                 values[key] = float(ds[()])
                 descriptions[key] = _as_str(ds.attrs.get("description", ""))
+                if "spread" in ds.attrs:
+                    spreads[key] = float(ds.attrs["spread"])
             arrays: dict[str, np.ndarray] = {}
             attrs: dict[str, dict[str, Any]] = {}
 
@@ -1535,6 +1588,7 @@ def read_analysis(path) -> AnalysisData:
                 format_version=version,
                 created=_as_str(h5.attrs.get("created", "")),
                 creator_version=_as_str(h5.attrs.get("creator_version", "")),
+                spreads=spreads,
             )
         except KeyError as exc:
             raise StoreError(f"{name}: damaged analysis file (missing {exc.args[0]})") from None

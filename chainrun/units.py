@@ -13,11 +13,13 @@ magnitude falls in [1, 1000): ``scale_for("time", "si", [0, 2.2e-4])`` gives
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PAPER", "UNITS", "Scaled", "axis_label", "format_value", "scale_for"]
+__all__ = ["PAPER", "UNITS", "Scaled", "axis_label", "format_supported", "format_value",
+           "scale_for", "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
 PAPER = "paper units"
@@ -102,3 +104,72 @@ def format_value(value: float, quantity: str, units: str, digits: int = 4) -> st
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
     text = f"{value * scaled.factor:.{digits}g}"
     return f"{text} {scaled.unit}" if scaled.unit else text
+
+
+def _last_place(spread: float) -> int:
+    """The power of ten of the last digit a (finite, non-zero) ``spread`` supports:
+    the smallest place whose unit is at least the spread (3e-5 -> -4, 1e-5 -> -5)."""
+    spread = abs(spread)
+    last = math.floor(math.log10(spread))
+    if 10.0 ** last < spread * (1 - 1e-12):
+        last += 1
+    return last
+
+
+def format_supported(value: float, spread: float, digits: int = 6) -> str:
+    """``value`` with no digit that its ``spread`` does not support.
+
+    A spread of 0 (or NaN: not measured) leaves ``value`` at ``digits`` significant
+    digits (``.6g``). Otherwise the last digit kept is the one whose unit is at least
+    the spread, so it is uncertain by at most one unit: 0.148611 with a spread of 3e-5
+    is ``0.1486``, with 0.002 ``0.15`` (zeros kept: they are digits). A value whose
+    leading digit the spread does not reach is shown to one digit, marked ``~``; an
+    infinite spread supports nothing (``—``).
+
+    Parameters
+    ----------
+    value, spread : float
+    digits : int
+        The most significant digits shown.
+    """
+    if not math.isfinite(value):
+        return str(value)
+    if math.isnan(spread) or spread == 0.0:
+        return f"{value:.{digits}g}"
+    if not math.isfinite(spread):
+        return "—"
+    last = _last_place(spread)
+    lead = math.floor(math.log10(abs(value))) if value else last
+    if lead - last + 1 >= digits:                    # the spread cuts no digit of .6g
+        return f"{value:.{digits}g}"
+    if lead < last:
+        return f"~{value:.0e}"
+    if last <= 0 and 1e-4 <= abs(value) < 1e6:
+        return f"{value:.{-last}f}"
+    return f"{value:.{lead - last}e}"
+
+
+_SPEC = re.compile(r"(?P<head>[^.]*)\.(?P<digits>\d+)(?P<kind>[efg%])$")
+
+
+def supported_format(fmt: str, value: float, spread: float) -> str:
+    """``format(value, fmt)``, with no digit that ``spread`` does not support.
+
+    A fixed (``.4f``), percent (``.1%``), exponent (``.2e``) or general (``.6g``)
+    precision is lowered to the digits the spread supports (``format_supported``); a
+    spread of 0 or NaN, or a format of another kind, leaves it as it is.
+    """
+    found = _SPEC.match(fmt)
+    if found is None or math.isnan(spread) or spread == 0.0 or not math.isfinite(value):
+        return format(value, fmt)
+    if not math.isfinite(spread):
+        return "—"
+    head, digits, kind = found["head"], int(found["digits"]), found["kind"]
+    last = _last_place(spread * (100.0 if kind == "%" else 1.0))
+    if kind in "f%":
+        return format(value, f"{head}.{min(digits, max(0, -last))}{kind}")
+    lead = math.floor(math.log10(abs(value))) if value else last
+    if kind == "e":
+        return format(value, f"{head}.{min(digits, max(0, lead - last))}e")
+    text = format_supported(value, spread, digits)
+    return f"+{text}" if "+" in head and value >= 0 and not text.startswith("~") else text

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from chainrun.analysis.derived import SIGNIFICANT
+from chainrun.check import Check
 from chainrun.solver import EventKind
 from chainrun.solver.model import strikers
 from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
@@ -52,7 +53,8 @@ class RunSummary:
     None where no ball moves that way. ``events`` counts the logged events by
     ``EventKind`` name. ``impact`` is the impact energy and ``energy`` the shares of
     it (``SHARES``) at the end. ``dissipating`` is the contact (1-based) that
-    dissipated most, 0 for a wall, -1 for an elastic line.
+    dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is the run's
+    conditioning check (``chainrun.check.Check``), None for a run without one.
     """
 
     path: str
@@ -92,6 +94,7 @@ class RunSummary:
     last_time: float
     file_bytes: int
     line: str
+    check: Check | None = None
 
     @property
     def dissipated(self) -> float:
@@ -214,6 +217,7 @@ def summarize(run) -> RunSummary:
         last_time=float(run.times[-1]) if run.times.size else math.nan,
         file_bytes=os.path.getsize(run.path),
         line=describe_line(line, run.units),
+        check=run.check,
     )
 
 

@@ -102,6 +102,32 @@ def _pulse_lines(p) -> list[str]:
     return [("pulses    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 
+def _check(s) -> str:
+    """The conditioning check: how many balls hold, and the largest spread."""
+    from chainrun.check import HOLD, short
+    from chainrun.units import format_value
+
+    c = s.check
+    if c is None:
+        return "not run (chainrun simulate --check measures which digits hold)"
+    head = f"at rtol {short(c.rtol)} ({c.wall_time:.2f} s)"
+    if not c.ok:
+        return f"{head} FAILED ({c.outcome}): {c.message}"
+    speed = s.speed or 1.0
+    n = c.final_velocity_spread.size
+    hold = (f" ({format_value(HOLD * speed, 'velocity', s.units, 2)})"
+            if s.units == "si" else "")
+    ball, largest = c.largest()
+    if not math.isfinite(largest):
+        worst = f"ball {ball} separates in only one of the two runs"
+    else:
+        worst = (f"the largest spread is {format_value(largest, 'velocity', s.units, 2)}"
+                 + (f" ({largest / speed:.1e} of it)" if s.units == "si" else "")
+                 + f", ball {ball}")
+    return (f"{head}: {c.holding(speed)} of {n} balls hold to {short(HOLD)} of the impact "
+            f"speed{hold}; {worst}")
+
+
 def render(s, pulses=None) -> str:
     """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text, in the
     run's units; ``pulses`` (``chainrun.analysis.pulse.Pulses``) adds a section."""
@@ -145,6 +171,7 @@ def render(s, pulses=None) -> str:
           if s.closed_form else []),
         f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
         f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
+        f"check     {_check(s)}",
         *_balls(s, threshold),
         f"energy    {_shares(s)}",
         *damping,
@@ -172,6 +199,16 @@ _ENSEMBLE = (
 )
 
 
+def _holding(s) -> str:
+    """``"50/60"``: balls that hold to the check's level, of the run's; "-" without a
+    check, "failed" for a failed one."""
+    if s.check is None:
+        return "-"
+    if not s.check.ok:
+        return "failed"
+    return f"{s.check.holding(s.speed or 1.0)}/{s.n}"
+
+
 def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
     """An output folder of several runs: a line per run, and for an ``ensemble`` (one
     line over random seeds) the mean and sample standard deviation of each summary
@@ -184,12 +221,15 @@ def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
                                            for s in summaries])
     head = (f"{'file':<24} {'N':>7} {'K':>4} {'outcome':<10} {'end (' + time.unit + ')':>14} "
             f"{'events':>8} {'forward (' + speed.unit + ')':>16}")
+    checked = any(s.check is not None for s in summaries)
+    if checked:
+        head += f" {'hold to 1e-9':>13}"
     lines = [f"{path}: {len(summaries)} runs", head]
     for s in summaries:
         forward = s.forward[1] if s.forward else 0.0
         lines.append(f"{Path(s.path).name:<24} {s.n:>7} {s.k:>4} {s.outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
-                     f"{speed(forward):>16.6g}")
+                     f"{speed(forward):>16.6g}" + (f" {_holding(s):>13}" if checked else ""))
     if not ensemble:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
@@ -224,7 +264,9 @@ def info(paths: tuple[Path, ...]):
     run's own units.
 
     For a run file: the line (its spheres, masses, contacts, walls, damping), how the
-    run ended and when, its events, steps and cost, its conservation errors, the
+    run ended and when, its events, steps and cost, its conservation errors, which
+    digits hold (for a run made with --check: how many balls' velocities hold to 1e-9
+    of the impact speed, and the largest spread), the
     balls with the largest forward and backward velocities, how many balls rebound,
     are ejected (moving forward faster than 1% of the impact speed) or are left
     behind, how the impact energy is shared among them, the contacts and walls and

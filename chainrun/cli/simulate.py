@@ -22,6 +22,15 @@ EXIT_INTERRUPTED = 130
 @click.option("--force", is_flag=True,
               help="Replace run files computed from another config. Runs whose file "
                    "matches the config are skipped, with or without --force.")
+@click.option("--check", is_flag=True,
+              help="Run each line a second time at a tenth of its rtol and store the "
+                   "spread of every ball's final and separation velocities "
+                   "(results/final_velocity_spread); the summary says how many balls "
+                   "hold to 1e-9 of the impact speed. As solver.check = true.")
+@click.option("--check-outdir", type=click.Path(file_okay=False, path_type=Path),
+              help="With the check, also write each check run's own run file (and an "
+                   "index) into this folder, so that any number derived from the runs "
+                   "can be computed from both; implies --check.")
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
               help="Runs computed at once on this machine [default: 1, in this "
                    "process]; more start a local Dask cluster (local processes "
@@ -32,8 +41,9 @@ EXIT_INTERRUPTED = 130
 @click.option("--scheduler-file", type=click.Path(dir_okay=False, path_type=Path),
               help="Run on the Dask cluster described by this file "
                    "(dask scheduler --scheduler-file).")
-def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
-             scheduler: str | None, scheduler_file: Path | None):
+def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
+             check_outdir: Path | None, jobs: int | None, scheduler: str | None,
+             scheduler_file: Path | None):
     """Run the experiment in CONFIG (YAML or TOML) and write HDF5 run files.
 
     Each run goes to OUTDIR/<run_id>.h5 (H5MD 1.1: snapshots, contact events,
@@ -71,7 +81,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     has every key.
 
     Optional [solver] keys: t_end (stop time; default: run to the terminal state),
-    rtol (accuracy, default 1e-12), max_events. Optional [output] keys besides
+    rtol (accuracy, default 1e-12), max_events, check (true: as --check). Optional
+    [output] keys besides
     times: sensors (ball numbers) and sensor_dt, to sample the contact forces on
     those balls every sensor_dt, up to sensor_end (default: t_end, else the last
     snapshot time).
@@ -80,6 +91,13 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     "chain.mass.seed" = [1, 2, 3], or ask for replicas = 8 (each random table's seed
     moved on by 0..7); `chainrun info OUTDIR` gives their statistics, `chainrun plot
     OUTDIR` their mean and spread, chainrun.open_sweep(OUTDIR) one Dataset.
+
+    Which digits hold: --check (or solver.check = true) runs each line again at a
+    tenth of its rtol (ten times it where a tenth is below 1e-15) and stores each
+    ball's spread, |v(rtol) - v(check rtol)|; a ball holds when its spreads are at
+    most 1e-9 of the impact speed. A clean line holds on every ball; a cascade or a
+    disordered line may not, and its summary line says so. It doubles the solver's
+    time.
 
     Sweeps resume: a run whose file already holds the same config is skipped, so
     after an interruption the same command computes only what is missing. A file
@@ -92,6 +110,7 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
       chainrun simulate configs/examples/newtons-cradle.toml
       chainrun simulate sweep.toml --jobs 4
       chainrun simulate sweep.toml --force          # the config changed
+      chainrun simulate disorder.toml --check       # which digits hold
       chainrun simulate sweep.toml --scheduler tcp://10.0.0.5:8786
     """
     from chainrun._gc import start_up
@@ -118,7 +137,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     try:
         try:
             result = simulate_experiment(
-                experiment, outdir, force=force, jobs=jobs, scheduler=scheduler,
+                experiment, outdir, force=force, check=check, check_outdir=check_outdir,
+                jobs=jobs, scheduler=scheduler,
                 scheduler_file=scheduler_file, on_progress=bar.run_time,
                 on_run_done=run_done, on_update=bar.update,
                 on_warning=lambda w: click.echo(f"chainrun: warning: {w}", err=True),
@@ -138,9 +158,11 @@ def simulate(config: Path, outdir: Path | None, force: bool, jobs: int | None,
     computed = [r for r in result.computed if r.ok]
     skipped = [r for r in result.skipped if r.ok]
     solver_time = sum(r.wall_time for r in computed)
+    check_time = sum(r.check.wall_time for r in computed if r.check is not None)
+    checks = f", {check_time:.2f} s more for the checks" if check_time else ""
     where = f" {result.workers}" if result.workers else ""
     click.echo(f"{total} run{'s' * (total != 1)}: {len(computed)} computed{where} "
-               f"({solver_time:.2f} s of solver time), {len(skipped)} skipped, "
+               f"({solver_time:.2f} s of solver time{checks}), {len(skipped)} skipped, "
                f"{len(result.failures)} failed; index: {outdir / result.index.name}", err=True)
     if result.failures:
         sys.exit(EXIT_FAILED_RUNS)

@@ -17,7 +17,7 @@ RANK = {
     "chainrun.errors": 0, "chainrun.atomic": 0, "chainrun._gc": 0,
     "chainrun.materials": 0,  # data only
     "chainrun.units": 0,
-    "chainrun.solver": 1, "chainrun.generators": 1,
+    "chainrun.solver": 1, "chainrun.generators": 1, "chainrun.check": 1,
     "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
     "chainrun.store": 3,
     "chainrun.runner": 4, "chainrun.analysis": 4,
