@@ -86,8 +86,8 @@ RESULTS  ?= results
 JOBS     ?= 2
 CHAINRUN := $(BIN)/chainrun
 SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py chainrun/runner.py \
-                    chainrun/store.py
-ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py \
+                    chainrun/store.py chainrun/check.py
+ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py chainrun/check.py \
                     chainrun/analysis/similarity.py chainrun/analysis/nesterenko.py \
                     chainrun/artefacts.py chainrun/store.py
 PLOT_SOURCES     := chainrun/plotting/__init__.py chainrun/plotting/common.py \
@@ -104,13 +104,16 @@ include $(ARTEFACT_RULES)
 endif
 
 # A run folder is rebuilt from scratch: `chainrun simulate` skips run files of the same
-# config, which would keep results of an older solver.
+# config, which would keep results of an older solver. Every run is checked: run again
+# at a tenth of its tolerance into $(RESULTS)/check/runs/, so that each analysis computes
+# every number from both and stores its spread, and the comparison tables print no digit
+# that the spread does not support (docs/figures.md).
 $(RESULTS)/runs/%/index.h5: configs/%.toml $(SOLVER_SOURCES) | $(STAMP)
-	rm -rf $(@D)
-	$(CHAINRUN) simulate $< -o $(@D) --jobs $(JOBS)
+	rm -rf $(@D) $(RESULTS)/check/runs/$*
+	$(CHAINRUN) simulate $< -o $(@D) --jobs $(JOBS) --check-outdir $(RESULTS)/check/runs/$*
 
 $(RESULTS)/analysis/%.h5: $(ANALYSIS_SOURCES) | $(STAMP)
-	$(CHAINRUN) analyze $* --results $(RESULTS)
+	$(CHAINRUN) analyze $* --results $(RESULTS) --check
 
 # The artefacts build JOBS at a time, independent experiments side by side (each
 # simulate on JOBS workers as well): most of a run's time is its process starting, so

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from chainrun import artefacts
+from chainrun.check import spread
 from chainrun.errors import ChainrunError
 from chainrun.store import (
     AnalysisData,
@@ -41,7 +42,7 @@ from chainrun.store import (
     write_analysis,
 )
 
-__all__ = ["Inputs", "Result", "analyze"]
+__all__ = ["Inputs", "Result", "analyze", "check_results"]
 
 
 class Inputs:
@@ -145,7 +146,7 @@ def recipe(artefact: artefacts.Artefact):
     return getattr(importlib.import_module(f"chainrun.analysis.{module}"), function)
 
 
-def analyze(name: str, *, results="results") -> Path:
+def analyze(name: str, *, results="results", check: bool = False) -> Path:
     """Compute the analysis of artefact ``name`` and write its analysis file.
 
     Parameters
@@ -155,6 +156,14 @@ def analyze(name: str, *, results="results") -> Path:
     results : path-like
         The results folder: runs are read from ``<results>/runs/<experiment>/``, the
         analysis file is written to ``<results>/analysis/<name>.h5``.
+    check : bool
+        Also compute the same recipe from the check runs, ``<results>/check/runs/``
+        (written by ``chainrun simulate --check-outdir``: the same experiments at
+        ``chainrun.check.check_rtol``), into ``<results>/check/analysis/<name>.h5``,
+        and store each value's spread, ``|value - check value|`` (``AnalysisData.
+        spreads``): the part of the number that tolerance and rounding set. A
+        comparison artefact has no check of its own: it reads the spreads of the
+        analyses it compares.
 
     Returns
     -------
@@ -171,12 +180,63 @@ def analyze(name: str, *, results="results") -> Path:
     except KeyError as exc:
         raise ChainrunError(exc.args[0]) from None
     inputs = Inputs(artefact, results)
-    result = recipe(artefact)(inputs)
-    path = artefacts.analysis_path(name, results)
+    spreads: dict[str, float] = {}
+    if check and artefact.kind != "comparison":
+        check_inputs = Inputs(artefact, check_results(results))
+        checked = _analyze(artefact, check_inputs)
+        result = recipe(artefact)(inputs)
+        _paired(inputs, check_inputs)
+        found = read_analysis(checked)
+        spreads = {key: _spread(value, found.values.get(key, np.nan))
+                   for key, value in result.values.items()}
+        inputs.read.append(dict(kind="analysis", name=f"check/{name}", file=str(checked),
+                                sha256=file_sha256(checked)))
+    else:
+        result = recipe(artefact)(inputs)
+    return _write(artefact, inputs, result, spreads)
+
+
+def check_results(results) -> Path:
+    """The results folder of the check runs and their analyses, inside ``results``."""
+    return Path(results) / "check"
+
+
+def _paired(inputs: Inputs, check_inputs: Inputs) -> None:
+    """Refuse check runs that are not the checks of the runs (a config changed and
+    the runs were simulated again without ``--check-outdir``)."""
+    from chainrun.config import checked_config, config_hash  # pydantic: only when checking
+
+    for experiment, runs in inputs._runs.items():
+        checks = check_inputs._runs.get(experiment, [])
+        if len(checks) != len(runs):
+            raise ChainrunError(
+                f"{artefacts.index_path(experiment, check_inputs.results)}: {len(checks)} "
+                f"check runs for {len(runs)} runs of {experiment!r}; simulate it again "
+                "with --check-outdir")
+        for run, other in zip(runs, checks):
+            expected = config_hash(checked_config(run.parameters["config_resolved"]))
+            if other.parameters.get("config_hash") != expected:
+                raise ChainrunError(f"{other.path}: not the check run of {run.path} (another "
+                                    f"config); simulate {experiment!r} again with "
+                                    "--check-outdir")
+
+
+def _spread(value: float, other: float) -> float:
+    """``chainrun.check.spread`` of two scalars."""
+    return float(spread([value], [other])[0])
+
+
+def _analyze(artefact: artefacts.Artefact, inputs: Inputs) -> Path:
+    return _write(artefact, inputs, recipe(artefact)(inputs), {})
+
+
+def _write(artefact: artefacts.Artefact, inputs: Inputs, result: Result,
+           spreads: dict[str, float]) -> Path:
+    path = artefacts.analysis_path(artefact.name, inputs.results)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_analysis(path, AnalysisData(
         name=artefact.name, title=artefact.title, values=result.values,
         descriptions=result.descriptions, arrays=result.arrays, attrs=result.attrs,
-        settings=result.settings, inputs=inputs.read,
+        settings=result.settings, inputs=inputs.read, spreads=spreads,
     ))
     return path

@@ -8,7 +8,10 @@ source at hand has an empty ``text``: its row says *cannot be checked* and why, 
 shows chainrun's value alone; it never counts as agreement.
 
 Status of a row: ``agrees``; ``explained`` (disagrees, with the reason in its note);
-``cannot be checked``.
+``cannot be checked``. As in the paper's comparison, each computed value carries its
+spread (how far it moves when the runs' tolerance is cut tenfold, where the analyses
+were made with ``--check``): agreement is judged within it, and the notes print no
+digit beyond it.
 """
 
 from __future__ import annotations
@@ -21,8 +24,9 @@ from chainrun.errors import ChainrunError
 
 __all__ = ["COLUMNS", "GALLERY_PRINTED", "gallery_comparison", "status"]
 
-#: Columns of the table, in order (``computed`` is numeric).
-COLUMNS = ("key", "item", "where", "quantity", "published", "computed", "status", "note")
+#: Columns of the table, in order (``computed`` and ``spread`` are numeric).
+COLUMNS = ("key", "item", "where", "quantity", "published", "computed", "spread", "status",
+           "note")
 
 _HS = "Hinch & Saint-Jean (1999)"
 _DARAIO = "Daraio et al., PRE 73, 026610 (2006), quoting Nesterenko (their paper not at hand)"
@@ -207,16 +211,19 @@ GALLERY_PRINTED: tuple[tuple[str, Printed], ...] = (
 )
 
 
-def status(entry: Printed, computed: float) -> str:
-    """``"agrees"``, ``"explained"`` or ``"cannot be checked"`` (no published number)."""
+def status(entry: Printed, computed: float, spread: float = 0.0) -> str:
+    """``"agrees"`` (within ``spread``), ``"explained"`` or ``"cannot be checked"`` (no
+    published number)."""
     if not entry.text:
         return "cannot be checked"
-    return "agrees" if agrees(entry, computed) else "explained"
+    return "agrees" if agrees(entry, computed, spread) else "explained"
 
 
 def gallery_comparison(inputs: Inputs) -> Result:
     """One row per published number of the gallery."""
-    values = {name: inputs.analysis(name).values for name in inputs.artefact.needs}
+    analyses = {name: inputs.analysis(name) for name in inputs.artefact.needs}
+    values = {name: data.values for name, data in analyses.items()}
+    spreads = {name: data.spreads for name, data in analyses.items()}
     rows = []
     for item, entry in GALLERY_PRINTED:
         artefact, _, key = entry.source.partition("/")
@@ -225,26 +232,32 @@ def gallery_comparison(inputs: Inputs) -> Result:
         except KeyError:
             raise ChainrunError(f"gallery-comparison: {entry.key} needs {entry.source}, "
                                 "which no analysis file provides") from None
-        state = status(entry, computed)
+        spread = spreads[artefact].get(key, np.nan) if entry.source else np.nan
+        state = status(entry, computed, spread)
+        by_spread = state == "agrees" and status(entry, computed) != "agrees"
         if state == "explained" and not entry.note:
             state = "unexplained"
-        note = render_note(entry.note, values)
+        note = render_note(entry.note, values, spreads)
         if "{gallery-" in note:   # a field render_note could not read, e.g. a key with '.'
             raise ChainrunError(f"gallery-comparison: {entry.key}: a value its note quotes "
                                 f"is not filled in: {note}")
         rows.append(dict(key=entry.key, item=item, where=entry.where,
                          quantity=entry.quantity, published=entry.text or "—",
-                         computed=computed, status=state, note=note))
+                         computed=computed, spread=spread,
+                         status="agrees within the spread" if by_spread else state,
+                         note=note))
     keys = [row["key"] for row in rows]
     if len(set(keys)) != len(keys):
         raise ChainrunError("gallery-comparison: duplicate keys")
     r = Result()
     for column in COLUMNS:
         data = [row[column] for row in rows]
-        dtype = float if column == "computed" else str
+        dtype = float if column in ("computed", "spread") else str
         r.array(f"table/{column}", np.array(data, dtype=dtype))
     for state in ("agrees", "explained", "cannot be checked", "unexplained"):
-        r.value(state.replace(" ", "_"), sum(row["status"] == state for row in rows),
+        r.value(state.replace(" ", "_"), sum(row["status"].startswith(state) for row in rows),
                 f"rows whose status is {state!r}")
+    r.value("by_spread", sum(row["status"] == "agrees within the spread" for row in rows),
+            "rows that agree only within chainrun's spread")
     r.value("rows", len(rows), "numbers compared")
     return r

@@ -27,10 +27,13 @@ References
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from decimal import Decimal
 from fractions import Fraction
+
+from chainrun.units import supported_format
 
 __all__ = ["PRINTED", "Printed", "agrees", "parse", "render_note", "tolerance"]
 
@@ -93,27 +96,37 @@ def tolerance(text: str) -> float:
     return 0.0 if decimals is None else 0.5 * 10.0 ** (-decimals)
 
 
-def agrees(entry: Printed, computed: float) -> bool:
-    """Whether ``computed`` agrees with ``entry`` by its rule."""
+def agrees(entry: Printed, computed: float, spread: float = 0.0) -> bool:
+    """Whether ``computed`` agrees with ``entry`` by its rule, within ``spread``.
+
+    ``spread`` is how far the computed value moves when the runs' tolerance is cut
+    tenfold (``chainrun.check``; NaN or 0: not measured, or none): a value agrees when
+    some value within ``spread`` of it does, so that a number its runs do not pin down
+    is not called a disagreement.
+    """
+    s = 0.0 if math.isnan(spread) else abs(spread)
     if entry.rule == "between":
         low, high = entry.bounds
-        return low < computed < high
+        return low < computed + s and computed - s < high
     if entry.rule == "below":
-        return computed < entry.bounds[0]
+        return computed - s < entry.bounds[0]
     printed, _ = parse(entry.text)
     if entry.rule == "exact":
-        return abs(computed - printed) <= 1e-9
-    return abs(computed - printed) <= tolerance(entry.text) * (1 + 1e-9) + 1e-12
+        return abs(computed - printed) <= 1e-9 + s
+    return abs(computed - printed) <= tolerance(entry.text) * (1 + 1e-9) + 1e-12 + s
 
 
 _FIELD = re.compile(r"\{([a-z0-9-]+)/([A-Za-z0-9_]+)(?::([^}]*))?\}")
+def render_note(note: str, values: dict[str, dict[str, float]],
+                spreads: dict[str, dict[str, float]] | None = None) -> str:
+    """``note`` with each ``{artefact/value:fmt}`` replaced by the computed value, with
+    no digit beyond its spread (``spreads``, by artefact, where measured)."""
+    spreads = spreads or {}
 
-
-def render_note(note: str, values: dict[str, dict[str, float]]) -> str:
-    """``note`` with each ``{artefact/value:fmt}`` replaced by the computed value."""
     def field(match: re.Match) -> str:
         artefact, key, fmt = match.group(1), match.group(2), match.group(3) or ".6g"
-        return format(values[artefact][key], fmt)
+        spread = spreads.get(artefact, {}).get(key, math.nan)
+        return supported_format(fmt, values[artefact][key], spread)
 
     return _FIELD.sub(field, note)
 

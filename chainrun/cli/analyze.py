@@ -17,7 +17,11 @@ from chainrun.errors import ChainrunError
               default=Path("results"), show_default=True,
               help="Results folder: runs are read from RESULTS/runs/<experiment>/, analysis "
                    "files written to RESULTS/analysis/<name>.h5.")
-def analyze(names: tuple[str, ...], all_: bool, results: Path):
+@click.option("--check", is_flag=True,
+              help="Also analyse the check runs in RESULTS/check/runs/ (chainrun simulate "
+                   "--check-outdir) into RESULTS/check/analysis/ and store each value's "
+                   "spread: how far it moves when the runs' tolerance is cut tenfold.")
+def analyze(names: tuple[str, ...], all_: bool, results: Path, check: bool):
     """Derive the quantities of the paper's artefacts NAMES from their run files.
 
     Each artefact (a figure, a table, or a set of printed numbers; `chainrun plot
@@ -27,11 +31,18 @@ def analyze(names: tuple[str, ...], all_: bool, results: Path):
     figure draws, the named values the comparison table uses, the settings that
     produced them and the sha256 of every file read.
 
+    With --check, the same experiments simulated again at a tenth of their tolerance
+    (`chainrun simulate configs/<experiment>.toml -o RESULTS/runs/<experiment>
+    --check-outdir RESULTS/check/runs/<experiment>`) are analysed the same way, and
+    each value is stored with its spread, |value - check value|; the comparison
+    tables print no digit beyond it. `make figures` does this.
+
     \b
     Examples:
       chainrun analyze fig05
       chainrun analyze sec5a fig10 fig11
-      chainrun analyze --all              # what `make figures` does, in order
+      chainrun analyze --all              # every artefact, in order
+      chainrun analyze --all --check      # with spreads, as `make figures` does
     """
     from chainrun import artefacts
     from chainrun.analysis import analyze as analyze_artefact
@@ -42,7 +53,7 @@ def analyze(names: tuple[str, ...], all_: bool, results: Path):
         fail("name at least one artefact, or give --all (see `chainrun plot --list`)")
     for name in names:
         try:
-            path = analyze_artefact(name, results=results)
+            path = analyze_artefact(name, results=results, check=check)
         except ChainrunError as exc:
             fail(str(exc))
         click.echo(f"{name}: {path}")

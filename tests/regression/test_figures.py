@@ -268,7 +268,47 @@ def test_comparison_files_from_an_analysis(tmp_path):
                         arrays={f"table/{k}": v for k, v in table.items()})
     out = comparison.write(data)
     lines = out[".csv"].splitlines()
-    assert lines[0] == "key,where,quantity,paper,computed,agrees,rule,note"
-    assert lines[2] == 'b,Fig 2,y,1/4,0.3,false,exact,"because, | why"'
+    assert lines[0] == "key,where,quantity,paper,computed,spread,agrees,rule,note"
+    assert lines[2] == 'b,Fig 2,y,1/4,0.3,—,false,exact,"because, | why"'
     assert "**2 numbers: 1 agree, 1 disagree" in out[".md"]
     assert "### b" in out[".md"] and "because, \\| why" not in out[".md"].split("### b")[1]
+
+
+def test_a_comparison_number_prints_no_digit_beyond_its_spread():
+    """A value whose runs move by 3e-4 at a tenth of the tolerance: chainrun's 0.148611
+    is shown as 0.149, and agrees with a printed 0.149 only within that spread."""
+    from chainrun.analysis.paper import Printed, agrees, render_note
+    from chainrun.plotting import comparison
+    from chainrun.store import AnalysisData
+
+    entry = Printed("c", "§5a", "second ejected ball", "0.1489", "sec5a/ejected_2")
+    value, spread = 0.148611, 3e-4
+    assert not agrees(entry, value) and agrees(entry, value, spread)
+    assert not agrees(entry, value, 1e-5)
+    note = render_note("ejected at {sec5a/ejected_2:.5f}", {"sec5a": {"ejected_2": value}},
+                       {"sec5a": {"ejected_2": spread}})
+    assert note == "ejected at 0.149"
+    table = {
+        "key": np.array(["c", "d"]), "where": np.array(["§5a", "§5a"]),
+        "quantity": np.array(["x", "y"]), "paper": np.array(["0.1489", "0.25"]),
+        "computed": np.array([value, 0.2500004]), "spread": np.array([spread, 1e-13]),
+        "agrees": np.array([True, True]), "by_spread": np.array([True, False]),
+        "rule": np.array(["printed", "printed"]), "note": np.array(["", ""]),
+    }
+    data = AnalysisData(name="paper-comparison", title="", descriptions={}, attrs={},
+                        settings={}, inputs=[],
+                        values={"rows": 2, "agreeing": 2, "explained": 0, "unexplained": 0,
+                                "by_spread": 1},
+                        arrays={f"table/{k}": v for k, v in table.items()})
+    out = comparison.write(data)
+    csv = out[".csv"].splitlines()
+    assert csv[1] == "c,§5a,x,0.1489,0.149,3e-04,true,printed,"
+    assert csv[2] == "d,§5a,y,0.25,0.25,1e-13,true,printed,"   # .6g: the spread cuts none
+    assert "| c | §5a | x | 0.1489 | 0.149 | 3e-04 | yes, within the spread |" in out[".md"]
+    assert "2 agree (1 only within chainrun's spread)" in out[".md"]
+    for row, computed in ((csv[1], value), (csv[2], 0.2500004)):
+        shown, spread_ = row.split(",")[4:6]
+        decimals = len(shown.split(".")[1])
+        # no digit shown below the spread: one unit of the last digit is at least it
+        assert 10.0 ** -decimals >= float(spread_)
+        assert abs(float(shown) - computed) <= 0.5 * 10.0 ** -decimals
