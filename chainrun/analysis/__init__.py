@@ -183,6 +183,14 @@ def analyze(name: str, *, results="results", check: bool = False) -> Path:
     spreads: dict[str, float] = {}
     if check and artefact.kind != "comparison":
         check_inputs = Inputs(artefact, check_results(results))
+        for experiment in artefact.experiments:
+            index = artefacts.index_path(experiment, check_inputs.results)
+            if not index.exists():
+                raise ChainrunError(
+                    f"{index}: no check runs of experiment {experiment!r}; run `chainrun "
+                    f"simulate configs/{experiment}.toml -o "
+                    f"{artefacts.run_dir(experiment, results)} --check-outdir {index.parent}` "
+                    "first")
         checked = _analyze(artefact, check_inputs)
         result = recipe(artefact)(inputs)
         _paired(inputs, check_inputs)

@@ -57,3 +57,10 @@ def test_check_runs_of_another_config_are_refused(checked, tmp_path):
     shutil.copytree(results / "runs", copy / "check" / "runs")   # not the checks
     with pytest.raises(ChainrunError, match="not the check run"):
         analyze("table1", results=copy, check=True)
+
+
+def test_missing_check_runs_name_the_command_that_makes_them(checked, tmp_path):
+    results, _ = checked
+    shutil.copytree(results / "runs", tmp_path / "runs")
+    with pytest.raises(ChainrunError, match="--check-outdir"):
+        analyze("table1", results=tmp_path, check=True)

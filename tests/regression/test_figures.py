@@ -312,3 +312,25 @@ def test_a_comparison_number_prints_no_digit_beyond_its_spread():
         # no digit shown below the spread: one unit of the last digit is at least it
         assert 10.0 ** -decimals >= float(spread_)
         assert abs(float(shown) - computed) <= 0.5 * 10.0 ** -decimals
+
+
+def test_the_gallery_table_prints_no_digit_beyond_a_spread():
+    from chainrun.plotting import gallery_comparison
+    from chainrun.store import AnalysisData
+
+    table = {"key": ["e", "f"], "item": ["wall", "wall"], "where": ["a paper", "closed form"],
+             "quantity": ["x", "error"], "published": ["0.1489", "0"],
+             "computed": [0.148611, 7.1234e-13], "spread": [3e-4, 6e-13],
+             "status": ["agrees within the spread", "agrees"], "note": ["", ""]}
+    data = AnalysisData(name="gallery-comparison", title="", descriptions={}, attrs={},
+                        settings={}, inputs=[],
+                        values={"rows": 2, "agrees": 2, "explained": 0, "cannot_be_checked": 0,
+                                "unexplained": 0, "by_spread": 1},
+                        arrays={f"table/{k}": np.array(v) for k, v in table.items()})
+    out = gallery_comparison.write(data)
+    csv = out[".csv"].splitlines()
+    assert csv[0] == "key,item,where,quantity,published,computed,spread,status,note"
+    assert csv[1] == "e,wall,a paper,x,0.1489,0.149,3e-04,agrees within the spread,"
+    # an error of 7e-13 whose own spread is 6e-13 holds not one digit
+    assert csv[2] == "f,wall,closed form,error,0,~7e-13,6e-13,agrees,"
+    assert "2 agree (1 only within chainrun's spread)" in out[".md"]
