@@ -115,13 +115,13 @@ def _check(s) -> str:
         return f"{head} FAILED ({c.outcome}): {c.message}"
     speed = s.speed or 1.0
     n = c.final_velocity_spread.size
-    hold = (f" ({format_value(HOLD * speed, 'velocity', s.units, 2)})"
+    hold = (f" ({format_value(HOLD * speed, 'velocity', s.units, 3)})"
             if s.units == "si" else "")
     ball, largest = c.largest()
     if not math.isfinite(largest):
         worst = f"ball {ball} separates in only one of the two runs"
     else:
-        worst = (f"the largest spread is {format_value(largest, 'velocity', s.units, 2)}"
+        worst = (f"the largest spread is {format_value(largest, 'velocity', s.units, 3)}"
                  + (f" ({largest / speed:.1e} of it)" if s.units == "si" else "")
                  + f", ball {ball}")
     return (f"{head}: {c.holding(speed)} of {n} balls hold to {short(HOLD)} of the impact "
