@@ -21,11 +21,6 @@ TABLE1 = {
     4: ["0.0112", "0.8729", "1.015", "1.030", "1.071"],
 }
 
-#: The message of a known solver defect, found by fuzzing general lines: contacts that
-#: close and open again and again at one instant. Its reproducer is a strict xfail test
-#: in tests/regression/test_general_model.py; the fuzzer counts its runs as known.
-SETTLE_DEFECT = "contact states did not settle"
-
 #: The paper's artefacts cheap enough to build in the test suite (no dense snapshots).
 FAST = ("fig01", "fig02", "fig03", "fig04", "fig05", "fig06", "fig07", "sec4", "fig08",
         "fig09", "fig12", "fig13", "table1")

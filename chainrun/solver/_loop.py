@@ -493,6 +493,12 @@ def advance(S):
         tcol = np.inf
         if _heap_valid_top(S):
             tcol = S.hp_t[0]
+            if tcol <= t + 4.0 * EPS * abs(t):
+                # within the resolution of t (as _due takes it): the mirror image of a
+                # collision at this instant, its time rounded otherwise, is at this
+                # instant; a step that short moves no ball, and a contact closed now
+                # would neither press nor part in it
+                tcol = t
             if tcol <= t and S.ev_t.shape[0] - S.ints[I_NEV] < 2:
                 return ST_FLUSH
             if tcol <= t:

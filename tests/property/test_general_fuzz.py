@@ -59,7 +59,6 @@ from chainrun.config import parse_experiment
 from chainrun.materials import MATERIALS
 from chainrun.solver import Outcome, simulate_line, velocity_floor
 from chainrun.solver.restitution import LAWS
-from helpers import SETTLE_DEFECT
 from reference import line_energy, reference_line
 
 LONG = int(os.environ.get("CHAINRUN_FUZZ_EXAMPLES", "0") or 0)
@@ -84,12 +83,6 @@ TOL = {
 
 class Deadline(Exception):
     """A run took longer than ``TIME_BOUND``."""
-
-
-#: What a known solver defect's runs are counted as (not failures): it has a strict
-#: xfail test in tests/regression/test_general_model.py, which fails once the defect
-#: is fixed, and then this goes (``helpers.SETTLE_DEFECT``).
-KNOWN = f"known defect ({SETTLE_DEFECT}, test_general_model.py)"
 
 
 # --- drawing lines ---------------------------------------------------------------------
@@ -387,7 +380,7 @@ def test_every_line_runs(record_property):
     """Every drawn line runs to its end, or stops with a named outcome, in time; every
     run that ends well balances momentum and energy (``check_run``)."""
     tried, failures, slowest = [0], [], [0.0]
-    counts = {"terminal": 0, "stopped at t_end": 0, "failed with a message": 0, KNOWN: 0}
+    counts = {"terminal": 0, "stopped at t_end": 0, "failed with a message": 0}
 
     @_fuzz_settings(300)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -397,12 +390,6 @@ def test_every_line_runs(record_property):
             spec = with_times(doc, times, t_end)
             sol = run(spec, slowest)
             check_run(spec.line, sol, spec.t_end)
-        except RuntimeError as exc:
-            if SETTLE_DEFECT not in str(exc):
-                failures.append((doc, f"{type(exc).__name__}: {exc}"))
-                return
-            counts[KNOWN] += 1
-            return
         except Exception as exc:
             failures.append((doc, f"{type(exc).__name__}: {exc}"))
             return
@@ -420,7 +407,7 @@ def test_lines_agree_with_the_reference(record_property):
     ``TOL["reference"]`` (``compare``)."""
     tried, failures, slowest = [0], [], [0.0]
     counts = {"agreed": 0, "steered by rounding": 0, "reference failed": 0,
-              "not compared (too long for the quick run)": 0, KNOWN: 0}
+              "not compared (too long for the quick run)": 0}
 
     @_fuzz_settings(40)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -429,13 +416,7 @@ def test_lines_agree_with_the_reference(record_property):
         try:
             spec = with_times(doc, times, t_end)
             line = spec.line
-            try:
-                sol = run(spec, slowest)
-            except RuntimeError as exc:
-                if SETTLE_DEFECT not in str(exc):
-                    raise
-                counts[KNOWN] += 1
-                return
+            sol = run(spec, slowest)
             if not sol.outcome.ok:
                 raise AssertionError(f"{sol.outcome.value}: {sol.message}")
             if not LONG and sol.event_time.size > 40:
@@ -460,7 +441,7 @@ def test_lines_through_the_command(record_property, tmp_path_factory):
     from chainrun.store import read_run
 
     tried, failures = [0], []
-    counts = {"ran": 0, KNOWN: 0}
+    counts = {"ran": 0}
 
     @_fuzz_settings(30)
     @given(doc=general_lines(), times=SNAPSHOTS, t_end=T_END)
@@ -475,9 +456,6 @@ def test_lines_through_the_command(record_property, tmp_path_factory):
                                                str(folder / "out")])
             output = result.stdout + result.stderr
             assert "Traceback" not in output, output
-            if result.exit_code == 1 and SETTLE_DEFECT in output:
-                counts[KNOWN] += 1
-                return
             assert result.exit_code == 0, output
             counts["ran"] += 1
             stored = read_run(folder / "out" / "run.h5")
