@@ -13,6 +13,7 @@ only those above it::
     _state        the State arrays, their scalar slots and parameter rows, status
                   codes, shared constants, free flight
     _forces       the force law: contact forces, accelerations, contact energy
+    _drive        the drives (moving walls, forces in time): series, stages, work
     _generated    DOP853 stages and Taylor-series sums as straight-line code, written
                   whole by ``_codegen`` (``python -m chainrun.solver._codegen``)
     _steppers     one step (Taylor series or DOP853), positions inside the last step
@@ -40,6 +41,13 @@ goes (``OPEN``). Energy is then ``kinetic + contact + dissipated``, the dissipat
 energy (``Solution.dissipated``) integrated along the run: the damping's power
 eta d^beta d'^2 by each step's quadrature, and the elastic energy a contact held at 0
 still stores as it goes, exactly.
+
+A driven line (a wall whose displacement follows ``Wall.motion``, forces prescribed in
+time on chosen balls, ``Line.drives``; ``chainrun.solver.drive``) adds its drives to
+the accelerations, exactly in time, and ends every step at the drives' breakpoints as
+at contact events (``_drive``); its energy is ``kinetic + contact + dissipated =
+initial + drive work`` (``Solution.drive_work``), the drives' work integrated along
+the run as the dissipation is.
 """
 
 from __future__ import annotations
@@ -50,11 +58,14 @@ from typing import Callable
 
 import numpy as np
 
+from chainrun.solver.drive import Drive, Sine
 from chainrun.solver.model import Line, Scales, Wall
 
 __all__ = [
     "DEFAULT_RTOL",
     "Diagnostics",
+    "Drive",
+    "Sine",
     "EventKind",
     "Outcome",
     "Solution",
@@ -194,6 +205,12 @@ class Solution:
         The impulse the left and the right wall gave the line by ``end_time`` (+x
         towards ball N: the left wall's >= 0, the right's <= 0), integrated along the
         run; the momentum check accounts for it.
+    drive_work : ndarray, shape (T,)
+        The work the drives (moving walls, forces prescribed in time) did on the line
+        by each snapshot time (0 on a line without them): ``kinetic + contact +
+        dissipated = initial + drive_work``.
+    drive_energy : float
+        The same by ``end_time``.
     """
 
     n: int
@@ -226,6 +243,8 @@ class Solution:
                                             repr=False)
     wall_dissipation: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
     wall_impulse: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
+    drive_work: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    drive_energy: float = 0.0
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a

@@ -7,11 +7,13 @@ left alone (``_deactivate``). After any change ``_rebuild`` packs the clusters' 
 into the compact arrays that the steppers integrate, and schedules the freed balls'
 collisions with their free neighbours (``_heap``). A sealed collision (``_pairs``)
 that a cluster or a freed ball could reach is taken into the integration
-(``_unseal``).
+(``_unseal``). A driven ball (``_drive``) is never freed: left alone, it is a cluster
+of its own.
 """
 
 from __future__ import annotations
 
+from chainrun.solver._drive import _drive_place, _drive_stage, _pinned
 from chainrun.solver._forces import _rhs
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
@@ -21,7 +23,8 @@ from chainrun.solver._pairs import (
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
     ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_DISS, C_ETA, C_HELD, C_KAPPA, F_DISS, F_JL,
-    F_JR, F_T, I_DAMPED, I_DENSE, I_DIRTY, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN, I_NCL,
+    F_JR, F_T, I_DAMPED, I_DENSE, I_DIRTY, I_DRIVEN, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN,
+    I_NCL,
     I_NFREED, I_RWALL, I_RWL, I_SEALED, OPEN, SEALED, SL_PH, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA,
     W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
 )
@@ -90,6 +93,18 @@ def _free_ball(S, b):
 
 
 @kernel
+def _alone(S, b):
+    """Ball b has lost its last contact: it flies freely, or, driven, stays integrated
+    as a cluster of its own (its separation is recorded alike)."""
+    if S.ints[I_DRIVEN] == 1 and _pinned(S, b):
+        S.sep_t[b] = S.fs[F_T]
+        S.sep_v[b] = S.bv[b]
+        return _insert_cluster(S, b, b)
+    _free_ball(S, b)
+    return True
+
+
+@kernel
 def _activate(S, j, state):
     """Make contact j active, joining the clusters/balls on both sides."""
     S.cst[j] = state
@@ -132,11 +147,11 @@ def _deactivate(S, j, level):
     if j > lo:
         ok = ok and _insert_cluster(S, lo, j)
     else:
-        _free_ball(S, j)
+        ok = _alone(S, j) and ok
     if j + 1 < hi:
         ok = ok and _insert_cluster(S, j + 1, hi)
     else:
-        _free_ball(S, j + 1)
+        ok = _alone(S, j + 1) and ok
     S.ints[I_DIRTY] = 1
     return ok
 
@@ -243,10 +258,6 @@ def _rebuild(S):
             S.WP[W_MASS, p] = S.bp[B_MASS, b]
             p += 1
     S.ints[I_M] = m
-    # the lanes to the walls, whose forces the steps sum into the walls' impulses
-    last = S.bx.shape[0] - 1
-    S.ints[I_LWL] = S.bmap[0] if S.ints[I_LWALL] == 1 else -1
-    S.ints[I_RWL] = S.bmap[last] - 1 if S.ints[I_RWALL] == 1 and S.bmap[last] >= 0 else -1
     if m > S.ints[I_MAXWIN]:
         S.ints[I_MAXWIN] = m
     # contact lanes: their stiffness inside a cluster, 0 from a cluster's last ball to
@@ -268,9 +279,19 @@ def _rebuild(S):
                 S.WP[W_ETA, p] = S.cp[C_ETA, j]
                 S.WP[W_BETA, p] = S.cp[C_BETA, j]
                 S.WP[W_HELD, p] = S.cp[C_HELD, j]
+    # the lanes to the walls, whose forces the steps sum into the walls' impulses: a
+    # wall's lane where its contact is in its cluster (a moving wall may be alone)
+    last = S.bx.shape[0] - 1
+    pl = S.bmap[0]
+    pr = S.bmap[last] - 1
+    S.ints[I_LWL] = pl if S.ints[I_LWALL] == 1 and pl >= 0 and S.TR[pl] != 0.0 else -1
+    S.ints[I_RWL] = pr if S.ints[I_RWALL] == 1 and pr >= 0 and S.TR[pr] != 0.0 else -1
     for c in range(ncl):
         S.cen[c] = _cluster_energy(S, c)
     _rhs(S, S.X, S.V, S.A)
+    if S.ints[I_DRIVEN] == 1:
+        _drive_place(S)
+        _drive_stage(S, S.A, S.FS, t, 0.0, True)
     S.ints[I_DIRTY] = 0
     S.ints[I_DENSE] = 0
     S.ints[I_DSTAMP] += 1

@@ -42,13 +42,15 @@ def _combo(coefs, rows: str, scale: str, index: str = "p") -> str:
     return f"{scale} * (" + " + ".join(terms) + ")" if terms else "0.0"
 
 
-def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float = 0.0
-                ) -> list[str]:
+def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float = 0.0,
+                node: float = 1.0) -> list[str]:
     """Accelerations at positions x into KV[s], across the window (_accelerations).
 
     On a damped line the forces depend on the velocities too: the stage's velocities
     (``v``, or V0 + h vcoefs @ KV into VS) and, where ``weight`` (a weight of the
-    step's quadrature) is not 0, the lanes' dissipated power into DS.
+    step's quadrature) is not 0, the lanes' dissipated power into DS. On a driven line
+    the drives' accelerations at the stage's time t0 + node h are added, and, with a
+    weight, their power (from the driven balls' stage velocities, DVS) to jw.
     """
     if v is None:
         v = "VS"
@@ -63,6 +65,19 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
         "    if rwl >= 0:",
         f"        jr += {wgt} * F[rwl]",
     ] if weight != 0.0 else []
+    if weight != 0.0:
+        drive = [
+            "    if driven:",
+            "        for d in range(nd):",
+            "            p = DC[d, 1]",
+            f"            DVS[d] = V0[p] + {_combo(vcoefs, 'KV', 'h')}",
+            f"        jw += _drive_stage(S, KV[{s}], F, t0 + {float(node)!r} * h, {wgt}, True)",
+        ]
+    else:
+        drive = [
+            "    if driven:",
+            f"        _drive_stage(S, KV[{s}], F, t0 + {float(node)!r} * h, 0.0, True)",
+        ]
     return [
         "    if damped:",
         *stage_v,
@@ -70,6 +85,7 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
         "    else:",
         f"        _accelerations({x}, F, MK, WP, KV[{s}], m, mode, alpha, unit)",
         *impulse,
+        *drive,
     ]
 
 
@@ -82,7 +98,7 @@ def _stage_pass(out_x: str, s: int, node: float, coefs, vcoefs, weight: float = 
     return [
         "    for p in range(m):",
         f"        {out_x}[p] = X0[p] + h * ({drift})",
-        *_force_pass(out_x, s, vcoefs=vcoefs, weight=weight),
+        *_force_pass(out_x, s, vcoefs=vcoefs, weight=weight, node=node),
     ]
 
 
@@ -95,9 +111,13 @@ def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
         "    for q in range(lo, hi + 1):",
         f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
         "    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
-        "    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):",
+        "    qa = lo if lo == o else lo + 1",
+        "    qb = hi if hi == e else hi - 1",
+        "    for q in range(qa, qb + 1):",
         f"        KV[{s}, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0))"
         " * WP[W_IM, q] + WP[W_ACC, q]",
+        "    if driven:",
+        f"        _drive_band(S, KV[{s}], t0 + {float(node)!r} * h, qa, qb)",
     ]
 
 
@@ -109,6 +129,10 @@ _PROLOGUE = [
     "    damped = S.ints[I_DAMPED] == 1",
     "    F, MK, WP = S.FS, S.TR, S.WP",
     "    VS, DS = S.KV[KV_VS], S.KV[KV_DS]",
+    "    driven = S.ints[I_DRIVEN] == 1",
+    "    DC, DVS = S.dcur, S.DVS",
+    "    nd = DC.shape[0]",
+    "    t0 = S.fs[F_TPREV]",
 ]
 
 
@@ -166,7 +190,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
     """
     lanes = range(tile)
     if mixed:
-        name, args = "_series_orders_mixed", "TX, W, G, IM, AL, nc, m, unit"
+        name, args = "_series_orders_mixed", "TX, W, G, IM, AL, nc, m, unit, DT, DC"
         doc = "Orders 1 and up of the force series, each lane its own alpha (see _taylor)."
         head = [f"            a{i} = AL[t * SERIES_TILE + {i}]" for i in lanes]
         head += [f"            b{i} = a{i} + 1.0" for i in lanes]
@@ -176,7 +200,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         def term(acc, i):
             return f"                {acc}{i} += (b{i} * jk - 1.0) * W[c + {i}] * W[f + {i}]"
     else:
-        name, args = "_series_orders", "TX, W, G, IM, nc, m, alpha, unit"
+        name, args = "_series_orders", "TX, W, G, IM, nc, m, alpha, unit, DT, DC"
         doc = "Orders 1 and up of the force series of every contact lane (see _taylor)."
         head = []
         first = [f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes]
@@ -217,8 +241,11 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         *[f"            e{i} = (e{i} + d{i}) * W[f + {i}]" for i in lanes],
         *[f"            W[c + {i}] = e{i}" for i in lanes],
         *[f"            G[g + {i}] = e{i}" for i in lanes],
-        "        # the balls' terms from the forces, which G holds in one row",
+        "        # the balls' terms from the forces, which G holds in one row (and the",
+        "        # drives' terms, on a driven line)",
         "        _series_terms(TX, k + 2, G, IM, nc, SERIES_SCALE[k], unit)",
+        "        if DT.shape[0] > 0:",
+        "            _drive_terms(TX, k + 2, DT, DC)",
         "    # the compressions' last two orders, for the bounds (_series_bounds)",
         "    for p in range(nc):",
         f"        W[_tw(p, {pt - 1})] = TX[{pt - 1}, p] - TX[{pt - 1}, p + 1]",
@@ -241,7 +268,7 @@ def _linear(pt: int, tile: int) -> list[str]:
     xs = range(tile + 1)
     lines = [
         "@kernel",
-        "def _linear_orders(TX, W, G, MK, IM, nc, unit):",
+        "def _linear_orders(TX, W, G, MK, IM, nc, unit, DT, DC):",
         '    """Orders 1 and up of a linear line\'s series (see _taylor): each lane\'s',
         "    compression c_k into the work tiles and its force kappa c_k into G (one row, so",
         '    that the pass over the balls, _series_terms, reads neighbours with no branch)."""',
@@ -261,6 +288,8 @@ def _linear(pt: int, tile: int) -> list[str]:
         "            G[p] = d * MK[p]",
         f"        if k < {pt - 1}:",
         "            _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)",
+        "            if DT.shape[0] > 0:",
+        "                _drive_terms(TX, k + 2, DT, DC)",
     ]
     return lines
 
@@ -319,14 +348,16 @@ _HEADER = [
     "",
     "import numpy as np",
     "",
+    "from chainrun.solver._drive import _drive_band, _drive_stage, _drive_terms",
     "from chainrun.solver._forces import (",
     "    _accelerations, _damped_accelerations, _damped_forces, _forces, _load, _series_terms,",
     ")",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
-    "    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, HI_ROW, I_DAMPED, I_LWL, I_M, I_MODE,",
-    "    I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW, PAIR_ATOL, PAIR_RTOL, SERIES_SCALE,",
-    "    SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,",
+    "    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, F_TPREV, F_WSTEP, HI_ROW, I_DAMPED,",
+    "    I_DRIVEN, I_LWL, I_M, I_MODE, I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW,",
+    "    PAIR_ATOL, PAIR_RTOL, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,",
+    "    _find_cluster, _tw,",
     ")",
 ]
 
@@ -406,7 +437,8 @@ def generate() -> str:
         "    KV[s] holds the stage accelerations and KV[12] those at the step's end. The",
         "    stage velocities are needed only on a damped line (VS), where the lanes'",
         "    dissipated power is summed with the step's weights into DS. The walls'",
-        "    forces are summed likewise into their impulses over the step (F_JSL, F_JSR).",
+        "    forces are summed likewise into their impulses over the step (F_JSL, F_JSR),",
+        "    and on a driven line the drives' power into their work over it (F_WSTEP).",
         '    """',
         *_PROLOGUE,
         "    KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V",
@@ -429,6 +461,11 @@ def generate() -> str:
         f"        jl = h * {float(B[0])!r} * F[lwl]",
         "    if rwl >= 0:",
         f"        jr = h * {float(B[0])!r} * F[rwl]",
+        "    jw = 0.0",
+        "    if driven:",
+        "        for d in range(nd):",
+        "            DVS[d] = V0[DC[d, 1]]",
+        f"        jw = _drive_stage(S, KV[0], F, t0, h * {float(B[0])!r}, False)",
     ]
     for s in range(1, ns):
         lines += _stage_pass("X", s, C[s], AA[s, :s], A[s, :s], B[s])
@@ -439,6 +476,7 @@ def generate() -> str:
         *_force_pass("X", ns, v="V"),
         "    S.fs[F_JSL] = jl",
         "    S.fs[F_JSR] = jr",
+        "    S.fs[F_WSTEP] = jw",
     ]
     e5x, e3x = _nystrom(dop.E5), _nystrom(dop.E3)
     lines += [
@@ -501,6 +539,8 @@ def generate() -> str:
         "    alpha = S.fs[F_ALPHA]",
         "    h = S.fs[F_HLAST]",
         "    KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP",
+        "    driven = S.ints[I_DRIVEN] == 1",
+        "    t0 = S.fs[F_TPREV]",
         "    c = _find_cluster(S, S.cb[p])",
         "    o = S.coff[c]",
         "    e = o + S.chi[c] - S.clo[c]",

@@ -149,7 +149,10 @@ class _Prepared:
         if self.damped:
             eta, self.beta = line.damping_params()
             self.eta = eta * (sc.length ** self.beta * sc.velocity / sc.force)
-        self.unit = (not self.forced and not self.damped and nb == n
+        self._prepare_drives(line)
+        if self.driven:
+            self.flat = False
+        self.unit = (not self.forced and not self.damped and not self.driven and nb == n
                      and bool(np.all(self.mass == 1.0)))
         a = alpha
         if a.size == 0 or (_alike(a) and a[0] == 1.0):
@@ -160,6 +163,42 @@ class _Prepared:
             self.mode, self.alpha0 = _state.MODE_POWER, float(a[0])
         else:
             self.mode, self.alpha0 = _state.MODE_MIXED, math.nan
+
+    def _prepare_drives(self, line: Line) -> None:
+        """The drives as the kernels take them (``_drive``): per drive its internal
+        ball, kind and pieces, in the units of the scales. A moving wall starts where
+        its motion has it, at its motion's velocity; a driven ball's drive is an
+        acceleration, its force over its mass."""
+        sc = self.scales
+        found = []  # (internal ball, kind, drive, value scale, dm)
+        for b, wall in ((0, line.left), (self.nb - 1, line.right)):
+            if wall is not None and wall.motion is not None:
+                found.append((b, _state.DRIVE_POSITION, wall.motion, sc.length,
+                              self.offset[b]))
+        for ball, drive in line.drives:
+            b = ball + self.lw
+            found.append((b, _state.DRIVE_FORCE, drive, sc.force * self.mass[b],
+                          self.mass[b]))
+        self.driven = bool(found)
+        dv = np.zeros((len(found), _state.DV_HI + 1), np.int64)
+        dm = np.zeros(len(found))
+        starts, ranges, terms = [], [], []
+        for d, (b, kind, drive, scale, extra) in enumerate(found):
+            t0, pieces = drive.pieces(sc.time, scale)
+            dv[d] = (b, kind, len(starts), len(starts) + t0.size)
+            dm[d] = extra
+            for start, rows in zip(t0, pieces):
+                q = sum(r.shape[0] for r in terms)
+                starts.append(start)
+                ranges.append((q, q + rows.shape[0]))
+                terms.append(rows)
+            if kind == _state.DRIVE_POSITION:
+                self.y0[b] += float(drive(0.0)) / sc.length
+                self.v0[b] = float(drive(0.0, 1)) * sc.time / sc.length
+        self.dv, self.dm = dv, dm
+        self.pc_t = np.array(starts, dtype=float)
+        self.pc_q = np.array(ranges, dtype=np.int64).reshape(-1, 2)
+        self.dq = (np.concatenate(terms) if terms else np.zeros((0, 8))).astype(float)
 
     def positions(self, y: np.ndarray) -> np.ndarray:
         """The line's displacements, in its units, from internal positions."""
@@ -273,13 +312,26 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     else:
         cst, lvl = np.full(1, _state.DORMANT, np.int8), np.zeros(1)
         starts = ends = freed0 = np.zeros(0, np.int64)
+    if P.driven:
+        # a driven ball is never free: alone, it is a cluster of its own
+        pinned = np.unique(P.dv[:, _state.DV_BALL])
+        inside = np.zeros(nb, bool)
+        for lo, hi in zip(starts, ends):
+            inside[lo:hi + 1] = True
+        alone = pinned[~inside[pinned]]
+        starts = np.concatenate([starts, alone]).astype(np.int64)
+        ends = np.concatenate([ends, alone]).astype(np.int64)
+        order = np.argsort(starts, kind="stable")
+        starts, ends = starts[order], ends[order]
+        freed0 = freed0[~np.isin(freed0, pinned)]
+    nd = P.dv.shape[0]
     bp = np.zeros((3, nb))
     bp[_state.B_MASS] = P.mass
     bp[_state.B_IM] = P.im
     bp[_state.B_ACC] = P.acc
     fs = np.zeros(_state.F_NFLOAT)
     ints = np.zeros(_state.I_NINT, np.int64)
-    ccap = nb // 2 + 2
+    ccap = nb // 2 + 2 + nd
     clo = np.zeros(ccap, np.int64)
     chi = np.zeros(ccap, np.int64)
     clo[:starts.size] = starts
@@ -299,6 +351,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     ints[_state.I_UNIT] = 1 if P.unit else 0
     ints[_state.I_FORCED] = 1 if P.forced else 0
     ints[_state.I_DAMPED] = 1 if P.damped else 0
+    ints[_state.I_DRIVEN] = 1 if P.driven else 0
     # isolated collisions taken whole: free flight in straight lines
     ints[_state.I_PAIRS] = 1 if closed_form and not P.forced else 0
     ints[_state.I_LWALL] = P.lw
@@ -322,6 +375,10 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
         ox=np.zeros(nb), ov=np.zeros(nb), probe=np.zeros(0, np.int64),
         freed=freed, jbuf=np.zeros(nb, np.int64),
+        dv=P.dv, dm=P.dm, pc_t=P.pc_t, pc_q=P.pc_q, dq=P.dq,
+        dcur=np.stack([P.dv[:, _state.DV_LO], np.full(nd, -1, np.int64)], axis=1)
+        .astype(np.int64).reshape(nd, 2),
+        DT=np.zeros((nd, _state.PT + 1)), DVS=np.zeros(nd),
         fs=fs, ints=ints,
     )
 
@@ -415,8 +472,8 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         raise TypeError(f"expected a chainrun.solver.Line, got {type(line).__name__}")
     times = _check_inputs(times, t_end, rtol, max_events)
     if t_end is None and not line.has_terminal_state:
-        raise ValueError("this line has no terminal state (an external force keeps "
-                         "doing work, or walls hold it at both ends): give t_end")
+        raise ValueError("this line has no terminal state (an external force or a drive "
+                         "keeps doing work, or walls hold it at both ends): give t_end")
     sensor_balls, sensor_dt, sensor_end = _check_sensors(sensors, sensor_dt, sensor_end,
                                                          line.n)
     P = _Prepared(line)
@@ -433,11 +490,13 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     positions = np.empty((nt, n)) if keep else None
     velocities = np.empty((nt, n)) if keep else None
     dissipated = np.zeros(nt)
+    work = np.zeros(nt)
 
     def emit(i, t):
         x = P.positions(S.ox)
         v = P.velocities(S.ov)
         dissipated[i] = S.fs[_state.F_DOUT] * sc.energy
+        work[i] = S.fs[_state.F_WOUT] * sc.energy
         if keep:
             positions[i] = x
             velocities[i] = v
@@ -549,6 +608,7 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         diagnostics=diagnostics, sensor_balls=sensor_balls, sensor_time=sensor_time,
         sensor_force=sensor_force, line=line,
         dissipated=dissipated, dissipated_energy=float(S.fs[_state.F_DISS]) * sc.energy,
+        drive_work=work, drive_energy=float(S.fs[_state.F_WORK]) * sc.energy,
         contact_dissipation=per_contact[P.lw:P.lw + n - 1].copy() if n > 1 else np.zeros(0),
         wall_dissipation=walls,
         wall_impulse=np.array([S.fs[_state.F_JL], -S.fs[_state.F_JR]]) * sc.mass * sc.velocity,
@@ -561,10 +621,13 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     The paper's line: momentum and energy in its units, absolute and relative to the
     initial energy K/2, as ever. Any other line, in its own units (``physics``): the
     momentum changes by the external forces' impulse ``sum f t`` (with a wall it is not
-    the walls' impulses), relative to the momentum of the line's scales; kinetic plus contact energy less the forces' work is conserved,
+    the walls' impulses, or the drives'), relative to the momentum of the line's
+    scales; kinetic plus contact energy less the forces' work is conserved,
     relative to the initial kinetic energy (or, for a line starting at rest, to its
     initial energy or the work, the larger); on a damped line the energy the damping
-    dissipated counts in the balance.
+    dissipated counts in the balance, on a driven line the drives' work (relative to
+    the energy in motion: the largest of the initial and final kinetic energy, the
+    work and the contacts' energy gained).
     """
     line = P.line
     if line.is_paper and np.all(line.alpha == P.alpha0):
@@ -581,16 +644,24 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
         # the walls' impulses (integrated along the run, as the dissipated energy is)
         # and the external forces' change the momentum
         walls = float(S.fs[_state.F_JL] - S.fs[_state.F_JR]) * sc.mass * sc.velocity
-        p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t * sc.time + walls
+        t_end = t * sc.time
+        drives = sum(float(d.integral(t_end)) for _, d in line.drives)
+        p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t_end + walls + drives
         p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
         k0 = float(line_kinetic_energy(v0, m))
-        e0 = k0 + float(line_potential_energy(x0, line))
-        # what the damping dissipated is part of the balance
-        e1 = float(line_kinetic_energy(v1, m) + line_potential_energy(x1, line)
-                   + S.fs[_state.F_DISS] * sc.energy)
+        u0 = float(line_potential_energy(x0, line, 0.0))
+        e0 = k0 + u0
+        # what the damping dissipated is part of the balance, less what the drives did
+        k1 = float(line_kinetic_energy(v1, m))
+        u1 = float(line_potential_energy(x1, line, t_end))
+        work = float(S.fs[_state.F_WORK]) * sc.energy
+        e1 = k1 + u1 + float(S.fs[_state.F_DISS]) * sc.energy - work
         # relative to the energy of the impact (a precompressed line stores far more,
         # at rest), or for a line starting at rest to the energy it takes up
-        scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
+        if P.driven:
+            scale = max(k0, k1, abs(work), abs(u1 - u0))
+        else:
+            scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
         eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0

@@ -13,14 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from chainrun.solver._drive import _drive_band, _drive_stage, _drive_terms
 from chainrun.solver._forces import (
     _accelerations, _damped_accelerations, _damped_forces, _forces, _load, _series_terms,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, HI_ROW, I_DAMPED, I_LWL, I_M, I_MODE,
-    I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW, PAIR_ATOL, PAIR_RTOL, SERIES_SCALE,
-    SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,
+    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, F_TPREV, F_WSTEP, HI_ROW, I_DAMPED,
+    I_DRIVEN, I_LWL, I_M, I_MODE, I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW,
+    PAIR_ATOL, PAIR_RTOL, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,
+    _find_cluster, _tw,
 )
 
 
@@ -32,7 +34,8 @@ def _stages(S, h):
     KV[s] holds the stage accelerations and KV[12] those at the step's end. The
     stage velocities are needed only on a damped line (VS), where the lanes'
     dissipated power is summed with the step's weights into DS. The walls'
-    forces are summed likewise into their impulses over the step (F_JSL, F_JSR).
+    forces are summed likewise into their impulses over the step (F_JSL, F_JSR),
+    and on a driven line the drives' power into their work over it (F_WSTEP).
     """
     m = S.ints[I_M]
     mode = S.ints[I_MODE]
@@ -41,6 +44,10 @@ def _stages(S, h):
     damped = S.ints[I_DAMPED] == 1
     F, MK, WP = S.FS, S.TR, S.WP
     VS, DS = S.KV[KV_VS], S.KV[KV_DS]
+    driven = S.ints[I_DRIVEN] == 1
+    DC, DVS = S.dcur, S.DVS
+    nd = DC.shape[0]
+    t0 = S.fs[F_TPREV]
     KV, X0, V0, A0, X, V = S.KV, S.X0, S.V0, S.A0, S.X, S.V
     lwl = S.ints[I_LWL]
     rwl = S.ints[I_RWL]
@@ -61,6 +68,11 @@ def _stages(S, h):
         jl = h * 0.054293734116568765 * F[lwl]
     if rwl >= 0:
         jr = h * 0.054293734116568765 * F[rwl]
+    jw = 0.0
+    if driven:
+        for d in range(nd):
+            DVS[d] = V0[DC[d, 1]]
+        jw = _drive_stage(S, KV[0], F, t0, h * 0.054293734116568765, False)
     for p in range(m):
         X[p] = X0[p] + h * (0.05260015195876773 * V0[p])
     if damped:
@@ -69,6 +81,8 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[1], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[1], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[1], F, t0 + 0.05260015195876773 * h, 0.0, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.0789002279381516 * V0[p] + h * (0.003112622984346139 * KV[0, p]))
     if damped:
@@ -77,6 +91,8 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[2], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[2], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[2], F, t0 + 0.0789002279381516 * h, 0.0, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.1183503419072274 * V0[p] + h * (0.0017508504286947032 * KV[0, p] + 0.00525255128608411 * KV[1, p]))
     if damped:
@@ -85,6 +101,8 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[3], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[3], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[3], F, t0 + 0.1183503419072274 * h, 0.0, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.2816496580927726 * V0[p] + h * (0.009915816237971964 * KV[0, p] + -0.05234336665618132 * KV[1, p] + 0.0820908153700972 * KV[2, p]))
     if damped:
@@ -93,6 +111,8 @@ def _stages(S, h):
         _damped_accelerations(X, VS, F, MK, WP, DS, 0.0, KV[4], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[4], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[4], F, t0 + 0.2816496580927726 * h, 0.0, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.3333333333333333 * V0[p] + h * (0.03533793130488635 * KV[0, p] + -0.09581915952175495 * KV[2, p] + 0.11603678377242414 * KV[3, p]))
     if damped:
@@ -105,6 +125,11 @@ def _stages(S, h):
         jl += h * 4.450312892752409 * F[lwl]
     if rwl >= 0:
         jr += h * 4.450312892752409 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (0.037037037037037035 * KV[0, p] + 0.17082860872947386 * KV[3, p] + 0.12546768756682242 * KV[4, p])
+        jw += _drive_stage(S, KV[5], F, t0 + 0.3333333333333333 * h, h * 4.450312892752409, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.25 * V0[p] + h * (0.018920483189113914 * KV[0, p] + -0.03815245266364541 * KV[2, p] + 0.05268745617004205 * KV[3, p] + -0.00220548669551055 * KV[4, p]))
     if damped:
@@ -117,6 +142,11 @@ def _stages(S, h):
         jl += h * 1.8915178993145003 * F[lwl]
     if rwl >= 0:
         jr += h * 1.8915178993145003 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (0.037109375 * KV[0, p] + 0.17025221101954405 * KV[3, p] + 0.06021653898045596 * KV[4, p] + -0.017578125 * KV[5, p])
+        jw += _drive_stage(S, KV[6], F, t0 + 0.25 * h, h * 1.8915178993145003, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.3076923076923077 * V0[p] + h * (0.03067021189623757 * KV[0, p] + -0.07975482628537983 * KV[2, p] + 0.0979912056772412 * KV[3, p] + -0.0014238754814449106 * KV[4, p] + -0.00014543770014516837 * KV[5, p]))
     if damped:
@@ -129,6 +159,11 @@ def _stages(S, h):
         jl += h * -5.801203960010585 * F[lwl]
     if rwl >= 0:
         jr += h * -5.801203960010585 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (0.03709200011850479 * KV[0, p] + 0.17038392571223998 * KV[3, p] + 0.10726203044637328 * KV[4, p] + -0.015319437748624402 * KV[5, p] + 0.008273789163814023 * KV[6, p])
+        jw += _drive_stage(S, KV[7], F, t0 + 0.3076923076923077 * h, h * -5.801203960010585, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.6512820512820513 * V0[p] + h * (-0.15229089727622033 * KV[0, p] + 0.46966087733519885 * KV[2, p] + -0.06814140470279369 * KV[3, p] + 0.01071185753171531 * KV[4, p] + 0.31196985474604216 * KV[5, p] + -0.35982613247286355 * KV[6, p]))
     if damped:
@@ -141,6 +176,11 @@ def _stages(S, h):
         jl += h * 0.3111643669578199 * F[lwl]
     if rwl >= 0:
         jr += h * 0.3111643669578199 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (0.6241109587160757 * KV[0, p] + -3.3608926294469414 * KV[3, p] + -0.868219346841726 * KV[4, p] + 27.59209969944671 * KV[5, p] + 20.154067550477894 * KV[6, p] + -43.48988418106996 * KV[7, p])
+        jw += _drive_stage(S, KV[8], F, t0 + 0.6512820512820513 * h, h * 0.3111643669578199, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.6 * V0[p] + h * (-0.11020716722377502 * KV[0, p] + 0.30128953154727944 * KV[2, p] + 0.07865735349516391 * KV[3, p] + 0.030838873981239242 * KV[4, p] + -0.31960414755130306 * KV[5, p] + -0.6851760518136165 * KV[6, p] + 0.8842016075650119 * KV[7, p]))
     if damped:
@@ -153,6 +193,11 @@ def _stages(S, h):
         jl += h * -0.1521609496625161 * F[lwl]
     if rwl >= 0:
         jr += h * -0.1521609496625161 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (0.47766253643826434 * KV[0, p] + -2.4881146199716677 * KV[3, p] + -0.590290826836843 * KV[4, p] + 21.230051448181193 * KV[5, p] + 15.279233632882423 * KV[6, p] + -33.28821096898486 * KV[7, p] + -0.020331201708508627 * KV[8, p])
+        jw += _drive_stage(S, KV[9], F, t0 + 0.6 * h, h * -0.1521609496625161, True)
     for p in range(m):
         X[p] = X0[p] + h * (0.8571428571428571 * V0[p] + h * (0.3721894995071433 * KV[0, p] + -0.5050736261155677 * KV[2, p] + -0.4614987464855827 * KV[3, p] + -0.06518509348541897 * KV[4, p] + 4.098038403866562 * KV[5, p] + 3.8922102844072377 * KV[6, p] + -7.025278165955339 * KV[7, p] + 0.06194438303648047 * KV[8, p]))
     if damped:
@@ -165,6 +210,11 @@ def _stages(S, h):
         jl += h * 0.20136540080403034 * F[lwl]
     if rwl >= 0:
         jr += h * 0.20136540080403034 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (-0.9371424300859873 * KV[0, p] + 5.186372428844064 * KV[3, p] + 1.0914373489967295 * KV[4, p] + -8.149787010746927 * KV[5, p] + -18.52006565999696 * KV[6, p] + 22.739487099350505 * KV[7, p] + 2.4936055526796523 * KV[8, p] + -3.0467644718982196 * KV[9, p])
+        jw += _drive_stage(S, KV[10], F, t0 + 0.8571428571428571 * h, h * 0.20136540080403034, True)
     for p in range(m):
         X[p] = X0[p] + h * (1.0 * V0[p] + h * (-0.7650750098382327 * KV[0, p] + 0.8347994820739504 * KV[2, p] + 1.7559441441931152 * KV[3, p] + 0.23253698859550578 * KV[4, p] + 11.903719357881853 * KV[5, p] + -1.9034949405460306 * KV[6, p] + -10.951226401858388 * KV[7, p] + 1.3530625395360725 * KV[8, p] + -1.9602661600378632 * KV[9, p]))
     if damped:
@@ -177,6 +227,11 @@ def _stages(S, h):
         jl += h * 0.04471061572777259 * F[lwl]
     if rwl >= 0:
         jr += h * 0.04471061572777259 * F[rwl]
+    if driven:
+        for d in range(nd):
+            p = DC[d, 1]
+            DVS[d] = V0[p] + h * (2.273310147516538 * KV[0, p] + -10.53449546673725 * KV[3, p] + -2.0008720582248625 * KV[4, p] + -17.9589318631188 * KV[5, p] + 27.94888452941996 * KV[6, p] + -2.8589982771350235 * KV[7, p] + -8.87285693353063 * KV[8, p] + 12.360567175794303 * KV[9, p] + 0.6433927460157636 * KV[10, p])
+        jw += _drive_stage(S, KV[11], F, t0 + 1.0 * h, h * 0.04471061572777259, True)
     for p in range(m):
         X[p] = X0[p] + h * (V0[p] + h * (0.05429373411656877 * KV[0, p] + 2.96687526183494 * KV[5, p] + 1.4186384244858756 * KV[6, p] + -4.016218126161175 * KV[7, p] + 0.10850859975965002 * KV[8, p] + -0.06086437986500647 * KV[9, p] + 0.028766485829147193 * KV[10, p]))
         V[p] = V0[p] + h * (0.054293734116568765 * KV[0, p] + 4.450312892752409 * KV[5, p] + 1.8915178993145003 * KV[6, p] + -5.801203960010585 * KV[7, p] + 0.3111643669578199 * KV[8, p] + -0.1521609496625161 * KV[9, p] + 0.20136540080403034 * KV[10, p] + 0.04471061572777259 * KV[11, p])
@@ -184,8 +239,11 @@ def _stages(S, h):
         _damped_accelerations(X, V, F, MK, WP, DS, 0.0, KV[12], m, mode, alpha)
     else:
         _accelerations(X, F, MK, WP, KV[12], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[12], F, t0 + 1.0 * h, 0.0, True)
     S.fs[F_JSL] = jl
     S.fs[F_JSR] = jr
+    S.fs[F_WSTEP] = jw
 
 
 @kernel
@@ -232,6 +290,10 @@ def _dense_stages(S):
     damped = S.ints[I_DAMPED] == 1
     F, MK, WP = S.FS, S.TR, S.WP
     VS, DS = S.KV[KV_VS], S.KV[KV_DS]
+    driven = S.ints[I_DRIVEN] == 1
+    DC, DVS = S.dcur, S.DVS
+    nd = DC.shape[0]
+    t0 = S.fs[F_TPREV]
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs = S.KV, S.X0, S.V0, S.XS
     for p in range(m):
@@ -242,6 +304,8 @@ def _dense_stages(S):
         _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[13], m, mode, alpha)
     else:
         _accelerations(Xs, F, MK, WP, KV[13], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[13], F, t0 + 0.1 * h, 0.0, True)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.2 * V0[p] + h * (0.009887781381457055 * KV[0, p] + -0.00760250313479944 * KV[5, p] + 0.047423345887574166 * KV[6, p] + -0.0363790659291871 * KV[7, p] + -0.021320408140087014 * KV[8, p] + 0.026772748548590852 * KV[9, p] + 0.0013364963323445063 * KV[10, p] + 0.001054215711719072 * KV[11, p] + -0.0011726106576121006 * KV[12, p]))
     if damped:
@@ -250,6 +314,8 @@ def _dense_stages(S):
         _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[14], m, mode, alpha)
     else:
         _accelerations(Xs, F, MK, WP, KV[14], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[14], F, t0 + 0.2 * h, 0.0, True)
     for p in range(m):
         Xs[p] = X0[p] + h * (0.7777777777777778 * V0[p] + h * (0.35886633997225575 * KV[0, p] + 9.38025080291835 * KV[5, p] + 7.477758624830405 * KV[6, p] + -15.729096304440624 * KV[7, p] + -0.3664913832247408 * KV[8, p] + 0.4520427193280568 * KV[9, p] + 0.024882489771726926 * KV[10, p] + 0.018743046880517162 * KV[11, p] + -0.02134289656466091 * KV[12, p] + -1.2931443036688188 * KV[13, p]))
     if damped:
@@ -258,6 +324,8 @@ def _dense_stages(S):
         _damped_accelerations(Xs, VS, F, MK, WP, DS, 0.0, KV[15], m, mode, alpha)
     else:
         _accelerations(Xs, F, MK, WP, KV[15], m, mode, alpha, unit)
+    if driven:
+        _drive_stage(S, KV[15], F, t0 + 0.7777777777777778 * h, 0.0, True)
 
 
 @kernel
@@ -273,6 +341,8 @@ def _dense_ball(S, p):
     alpha = S.fs[F_ALPHA]
     h = S.fs[F_HLAST]
     KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP
+    driven = S.ints[I_DRIVEN] == 1
+    t0 = S.fs[F_TPREV]
     c = _find_cluster(S, S.cb[p])
     o = S.coff[c]
     e = o + S.chi[c] - S.clo[c]
@@ -281,22 +351,34 @@ def _dense_ball(S, p):
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776213 * KV[0, q] + -0.41267006753617264 * KV[5, q] + -0.11888400830261192 * KV[6, q] + 0.5112504000718059 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.003198200361512927 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
     _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
-    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
         KV[13, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[13], t0 + 0.1 * h, qa, qb)
     lo = max(o, p - 2)
     hi = min(e, p + 2)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.2 * V0[q] + h * (0.009887781381457055 * KV[0, q] + -0.00760250313479944 * KV[5, q] + 0.047423345887574166 * KV[6, q] + -0.0363790659291871 * KV[7, q] + -0.021320408140087014 * KV[8, q] + 0.026772748548590852 * KV[9, q] + 0.0013364963323445063 * KV[10, q] + 0.001054215711719072 * KV[11, q] + -0.0011726106576121006 * KV[12, q]))
     _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
-    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
         KV[14, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[14], t0 + 0.2 * h, qa, qb)
     lo = max(o, p - 1)
     hi = min(e, p + 1)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.35886633997225575 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.024882489771726926 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
     _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
-    for q in range(lo if lo == o else lo + 1, (hi if hi == e else hi - 1) + 1):
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
         KV[15, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[15], t0 + 0.7777777777777778 * h, qa, qb)
 
 
 @kernel(inline="always")
@@ -315,7 +397,7 @@ def _dense_rows(S, p):
 
 
 @kernel
-def _linear_orders(TX, W, G, MK, IM, nc, unit):
+def _linear_orders(TX, W, G, MK, IM, nc, unit, DT, DC):
     """Orders 1 and up of a linear line's series (see _taylor): each lane's
     compression c_k into the work tiles and its force kappa c_k into G (one row, so
     that the pass over the balls, _series_terms, reads neighbours with no branch)."""
@@ -411,10 +493,12 @@ def _linear_orders(TX, W, G, MK, IM, nc, unit):
             G[p] = d * MK[p]
         if k < 23:
             _series_terms(TX, k + 2, G, IM, nc, 1.0 / ((k + 1) * (k + 2)), unit)
+            if DT.shape[0] > 0:
+                _drive_terms(TX, k + 2, DT, DC)
 
 
 @kernel
-def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
+def _series_orders(TX, W, G, IM, nc, m, alpha, unit, DT, DC):
     """Orders 1 and up of the force series of every contact lane (see _taylor)."""
     a1 = alpha + 1.0
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
@@ -549,8 +633,11 @@ def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
             G[g + 13] = e13
             G[g + 14] = e14
             G[g + 15] = e15
-        # the balls' terms from the forces, which G holds in one row
+        # the balls' terms from the forces, which G holds in one row (and the
+        # drives' terms, on a driven line)
         _series_terms(TX, k + 2, G, IM, nc, SERIES_SCALE[k], unit)
+        if DT.shape[0] > 0:
+            _drive_terms(TX, k + 2, DT, DC)
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]
@@ -558,7 +645,7 @@ def _series_orders(TX, W, G, IM, nc, m, alpha, unit):
 
 
 @kernel
-def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
+def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit, DT, DC):
     """Orders 1 and up of the force series, each lane its own alpha (see _taylor)."""
     nt = (nc + SERIES_TILE - 1) // SERIES_TILE
     f0 = 25  # row of f_0
@@ -724,8 +811,11 @@ def _series_orders_mixed(TX, W, G, IM, AL, nc, m, unit):
             G[g + 13] = e13
             G[g + 14] = e14
             G[g + 15] = e15
-        # the balls' terms from the forces, which G holds in one row
+        # the balls' terms from the forces, which G holds in one row (and the
+        # drives' terms, on a driven line)
         _series_terms(TX, k + 2, G, IM, nc, SERIES_SCALE[k], unit)
+        if DT.shape[0] > 0:
+            _drive_terms(TX, k + 2, DT, DC)
     # the compressions' last two orders, for the bounds (_series_bounds)
     for p in range(nc):
         W[_tw(p, 23)] = TX[23, p] - TX[23, p + 1]

@@ -27,26 +27,29 @@ from chainrun.solver._clusters import (
     _activate, _deactivate, _rebuild, _sync, _unseal_at_end, _unseal_near_clusters,
 )
 from chainrun.solver._compression import _pressed_in_step
+from chainrun.solver._drive import _drive_at, _drive_begin, _series_work
 from chainrun.solver._events import (
     _contact_at, _find_event, _load_rate, _log, _rounding,
 )
-from chainrun.solver._forces import _damping, _stored
+from chainrun.solver._forces import _damping, _force, _stored
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
 from chainrun.solver._jit import entry, kernel
 from chainrun.solver._pairs import _sealed_at, _sealed_contact, _sealed_lost
 from chainrun.solver._state import (
     ACTIVE, AFTER_EVENT, B_ACC, B_IM, C_ALPHA, C_BETA, C_DISS, C_DORM, C_EPS, C_ETA, C_HELD,
-    C_KAPPA, DORMANT, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD,
-    FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HCAP, F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND,
-    F_TOUT, F_TPREV, F_TSAME, F_TTASK, HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_EVTOTAL,
-    I_FORCED, I_HAVEOUT, I_JUMP, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL, I_PAIRS,
-    I_POST, I_REJ, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS, PT, SEALED, SERIES_CLUSTERS,
+    C_KAPPA, DORMANT, DRIVE_POSITION, DV_BALL, DV_KIND, EPS, EV_CLOSE, EV_ENGAGE, EV_OPEN,
+    EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HCAP, F_HLAST,
+    F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT, F_TPREV, F_TSAME, F_TTASK, F_WORK, F_WOUT,
+    F_WSTEP, HI_ROW, I_DAMPED, I_DIRTY, I_DRIVEN, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
+    I_HAVEOUT, I_JUMP, I_LWL, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL,
+    I_PAIRS, I_POST, I_REJ, I_RWL, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS,
+    MODE_MIXED, PT, SEALED, SERIES_CLUSTERS,
     ST_DEFECT, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
     ST_TERMINAL, ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at,
     _tw,
 )
 from chainrun.solver._steppers import (
-    _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at, _taylor_error,
+    _ball_at, _ball_now, _dense, _dense_at, _poly, _step, _taylor, _taylor_at, _taylor_error,
 )
 
 
@@ -152,14 +155,61 @@ def _commit_dissipation(S):
 
 
 @kernel
+def _drive_power(S, th):
+    """The drives' power at t_prev + th * h_last, inside the last step: a moving wall's
+    contact force times its velocity (the force its law gives, from the compression on
+    the step's dense output or series), a driven ball's drive times its velocity."""
+    t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
+    power = 0.0
+    for d in range(S.dv.shape[0]):
+        u, du, _ddu = _drive_at(S, d, t)
+        b = S.dv[d, DV_BALL]
+        if S.dv[d, DV_KIND] == DRIVE_POSITION:
+            left = b == 0
+            lane = S.ints[I_LWL] if left else S.ints[I_RWL]
+            if lane < 0:
+                continue
+            j = 0 if left else S.cst.shape[0] - 1
+            c, w, _s = _contact_at(S, j, th)
+            f = S.cp[C_KAPPA, j] * _force(c, MODE_MIXED, S.cp[C_ALPHA, j])
+            if S.ints[I_DAMPED] == 1 and S.cp[C_ETA, j] != 0.0:
+                f = 0.0 if S.cp[C_HELD, j] != 0.0 else \
+                    f + S.cp[C_ETA, j] * _damping(c, w, S.cp[C_BETA, j])
+            power += f * du if left else -f * du
+        else:
+            power += S.dm[d] * u * _ball_at(S, b, th)[1]
+    return power
+
+
+@kernel
+def _work_at(S, th):
+    """The drives' work up to t_prev + th * h_last (F_WORK counts the last step whole):
+    on a series step from its series (_series_work), on a DOP853 step by Gauss-Legendre
+    quadrature of their power on its dense output."""
+    if th >= 1.0:
+        return S.fs[F_WORK]
+    base = S.fs[F_WORK] - S.fs[F_WSTEP]
+    span = th * S.fs[F_HLAST]
+    if S.ints[I_TAY] == 1:
+        return base + _series_work(S, span)
+    total = 0.0
+    for i in range(_GAUSS_X.shape[0]):
+        total += _GAUSS_W[i] * _drive_power(S, th * _GAUSS_X[i])
+    return base + span * total
+
+
+@kernel
 def _snapshot(S, tout):
     """Fill (ox, ov) with the state at tout, inside the last step or in free flight,
-    and fs[F_DOUT] with the energy dissipated by then."""
+    fs[F_DOUT] with the energy dissipated by then, and fs[F_WOUT] with the drives'
+    work."""
     th = _output_phase(S, tout)
     if th < 1.0 and S.ints[I_TAY] == 0:
         _dense(S)  # the whole window's interpolant at once
     for b in range(S.bx.shape[0]):
         S.ox[b], S.ov[b] = _state_at(S, b, tout, th)
+    if S.ints[I_DRIVEN] == 1:
+        S.fs[F_WOUT] = _work_at(S, th)
     if S.ints[I_DAMPED] == 1:
         S.fs[F_DOUT] = _dissipated_at(S, th)
         if S.ints[I_SEALED] > 0:  # (a sealed contact counts its own when it ends)
@@ -546,6 +596,8 @@ def advance(S):
         if nsteps > YIELD_STEPS:
             return ST_YIELD
         # ---- one accepted step, ending at the earliest event if there is one ------------
+        # (a driven line's steps end at its drives' breakpoints too)
+        tbrk = _drive_begin(S, t) if S.ints[I_DRIVEN] == 1 else np.inf
         _save_start(S)
         # the series where it reaches further than DOP853's next step, else DOP853
         h = S.fs[F_H]
@@ -557,7 +609,7 @@ def advance(S):
         if tay:
             h = min(ht, S.fs[F_HCAP])
         order = PT if tay else 8
-        tclip = min(tcol, tend)
+        tclip = min(tcol, tend, tbrk)
         clipped = False
         if t + h >= tclip:
             h = tclip - t
@@ -664,6 +716,10 @@ def advance(S):
                 S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
         if S.ints[I_DAMPED] == 1:
             _commit_dissipation(S)
+        if S.ints[I_DRIVEN] == 1:
+            if tay:
+                S.fs[F_WSTEP] = _series_work(S, S.fs[F_HLAST])
+            S.fs[F_WORK] += S.fs[F_WSTEP]
         S.fs[F_JL] += S.fs[F_JSL]
         S.fs[F_JR] += S.fs[F_JSR]
         S.ints[I_STEPS] += 1

@@ -14,8 +14,8 @@ import numpy as np
 from chainrun.solver._forces import _potential
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    F_ALPHA, F_EPROJ, I_DAMPED, I_MODE, I_NCL, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA, W_IM,
-    W_MASS,
+    F_ALPHA, F_EPROJ, I_DAMPED, I_DRIVEN, I_MODE, I_NCL, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA,
+    W_IM, W_MASS,
 )
 
 
@@ -83,9 +83,9 @@ def _project_energy(S):
     not that motion's integration error, and is not applied. The corrections add up in
     fs[F_EPROJ], a measure of the integration error. (Hairer, Lubich & Wanner,
     Geometric Numerical Integration, IV.4: projection methods.) A damped line's energy
-    is not conserved, and is never projected.
+    is not conserved, nor a driven line's, and neither is ever projected.
     """
-    if S.ints[I_DAMPED] == 1:
+    if S.ints[I_DAMPED] == 1 or S.ints[I_DRIVEN] == 1:
         return
     M = S.WP[W_MASS]
     for c in range(S.ints[I_NCL]):

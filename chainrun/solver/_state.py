@@ -126,16 +126,20 @@ YIELD_STEPS = 20000
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
     F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_JL, F_JR, F_JSL, \
-    F_JSR, F_TTASK, F_HCAP, F_NFLOAT = range(24)
+    F_JSR, F_TTASK, F_HCAP, F_WORK, F_WSTEP, F_WOUT, F_NFLOAT = range(27)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_NINT = range(35)
+    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_DRIVEN, I_NINT = range(36)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
 # window's contact lane to that wall, -1 when no cluster touches it (_rebuild)
+
+# I_DRIVEN: 1 on a driven line (a moving wall, or a force prescribed in time: _drive);
+# F_WORK: the work the drives did so far; F_WSTEP: over the last step (on a DOP853
+# step summed over its stages as it is taken); F_WOUT: by the time of a snapshot
 
 # F_HCAP: a cap on the next series step, set where a series step's landing on an event
 # failed (the series sizes its own steps, and would take the same failing step again),
@@ -149,6 +153,14 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # I_XEND: 1 when (X, V, A) hold the window at the end of the last step (or trial step);
 # 0 while a series step is tried before the window is evaluated (see _loop.advance):
 # the ends of the few balls the event scan reads come from their series then
+
+# ---- the drives (_drive) -------------------------------------------------------------
+# rows of dv: the internal ball, the kind, the first and one past the last piece
+DV_BALL, DV_KIND, DV_LO, DV_HI = range(4)
+# a kind: the ball's position is u(t) (a moving wall), or its acceleration gains u(t)
+# (a force prescribed in time, over the ball's mass)
+DRIVE_POSITION = 0
+DRIVE_FORCE = 1
 
 # ---- what a call of ``advance`` does (I_TASK, at the time F_TTASK) --------------------
 # ``advance`` is the kernels' one entry point (one compiled library to load): besides
@@ -223,6 +235,13 @@ State = namedtuple(
         "ox", "ov", "probe",
         # scratch lists of ball / contact indices, shape (N,)
         "freed", "jbuf",
+        # the drives (see _drive; every array empty on a line without one): per drive
+        # its ball, kind, first and last piece (dv, rows DV_*) and the mass it drives
+        # (dm); per piece its start (pc_t) and its terms' range (pc_q); the terms (dq,
+        # rows of drive.TERM); per drive the piece in force and its ball's compact
+        # index (dcur), and the terms it adds to the positions' series at the step's
+        # start (DT, shape (PT + 1, D)), its stage velocity (DVS)
+        "dv", "dm", "pc_t", "pc_q", "dq", "dcur", "DT", "DVS",
         # scalars
         "fs", "ints",
     ],

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from chainrun.solver._drive import _drive_ends, _drive_series, _drive_stage
 from chainrun.solver._forces import _force, _rhs
 from chainrun.solver._generated import (
     _dense_ball, _dense_rows, _dense_stages, _error_norm, _linear_orders, _series_orders,
@@ -31,7 +32,8 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
-    F_TPREV, I_DAMPED, I_DENSE, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT, I_XEND,
+    F_TPREV, I_DAMPED, I_DENSE, I_DRIVEN, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT,
+    I_XEND,
     MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
     _tw,
 )
@@ -49,7 +51,8 @@ def _taylor(S):
     c f' = alpha c' f gives f_k = sum_{j=1..k} ((alpha+1) j - k) c_j f_{k-j} / (k c_0),
     whatever the stiffness; for alpha = 1, f = kappa c (Jorba & Zou, see the module's
     references). A ball's terms of order k + 2 are its net force's of order k over its
-    mass; its external force's acceleration adds to order 2 alone.
+    mass; its external force's acceleration adds to order 2 alone. On a driven line
+    the drives' series add to their balls' (``_drive``).
 
     The series are order-major (row k holds every ball's term of order k), and every
     loop runs across the window, clusters and all: the gap after a cluster's last ball
@@ -90,12 +93,17 @@ def _taylor(S):
         fl = W[_tw(p - 1, f0)] if p > 0 else 0.0
         fr = W[_tw(p, f0)] if p < nc else 0.0
         TX[2, p] = 0.5 * (fl - fr) if unit else 0.5 * ((fl - fr) * IM[p] + GA[p])
+    DT, DC = S.DT, S.dcur
+    if S.ints[I_DRIVEN] == 1:
+        _drive_series(S, S.fs[F_T])
+        for d in range(DT.shape[0]):
+            TX[2, DC[d, 1]] += DT[d, 2]
     if mode == MODE_LINEAR:
-        _linear_orders(TX, W, S.XS, MK, IM, nc, unit)
+        _linear_orders(TX, W, S.XS, MK, IM, nc, unit, DT, DC)
     elif mode == MODE_MIXED:
-        _series_orders_mixed(TX, W, S.XS, IM, AL, nc, m, unit)
+        _series_orders_mixed(TX, W, S.XS, IM, AL, nc, m, unit, DT, DC)
     else:
-        _series_orders(TX, W, S.XS, IM, nc, m, alpha, unit)
+        _series_orders(TX, W, S.XS, IM, nc, m, alpha, unit, DT, DC)
     # truncation: the last two terms of x and of v against the tolerance of each ball
     tol = TAYLOR_TOL * S.fs[F_TOL]
     qx1 = 0.0
@@ -182,6 +190,10 @@ def _taylor_step(S, h):
         X[p] = x
         V[p] = v
     _rhs(S, X, V, S.A)
+    if S.ints[I_DRIVEN] == 1:
+        t = S.fs[F_TPREV] + h
+        _drive_stage(S, S.A, S.FS, t, 0.0, True)
+        _drive_ends(S, t)
     S.fs[F_JSL] = _series_impulse(S, S.ints[I_LWL], h)
     S.fs[F_JSR] = _series_impulse(S, S.ints[I_RWL], h)
     for p in range(m):
@@ -227,6 +239,8 @@ def _step(S, h):
     _stages(S, h)
     for p in range(m):
         S.A[p] = S.KV[_NS, p]
+    if S.ints[I_DRIVEN] == 1:
+        _drive_ends(S, S.fs[F_TPREV] + h)
     err = _error_norm(S, h)
     if not np.isfinite(err):
         return np.inf

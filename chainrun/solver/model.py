@@ -12,7 +12,13 @@ while ``delta_j > 0`` never pulls: an elastic part and a damping part (``eta_j``
 damping, ``beta_j`` its exponent; ``eta_j = 0``, the default, is elastic). A wall is a contact with a body of infinite mass at rest: on the right
 ``delta_R = x_N - g_R``, on the left ``delta_L = -x_1 - g_L``.
 
-    m_i x_i'' = F_{i-1} - F_i + f_i
+    m_i x_i'' = F_{i-1} - F_i + f_i + d_i(t)
+
+A driven line moves under prescribed functions of time (``chainrun.solver.drive``): a
+wall whose displacement from its place follows ``Wall.motion`` w(t) (then
+``delta_L = w_L(t) - x_1 - g_L``, ``delta_R = x_N - w_R(t) - g_R``), and forces
+``d_i(t)`` on chosen balls (``Line.drives``). The drives do work on the line; it has
+no terminal state.
 
 Any consistent units will do (SI, or the paper's, where every coefficient is 1): the
 driver solves in units of the line's own scales (``Scales``), so that speeds, masses
@@ -26,6 +32,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from chainrun.solver.drive import Drive
+
 
 def _alike(a: np.ndarray) -> bool:
     """Whether every entry of ``a`` is the same (or there is none)."""
@@ -34,15 +42,23 @@ def _alike(a: np.ndarray) -> bool:
 
 @dataclass(frozen=True)
 class Wall:
-    """A flat wall of infinite mass at rest, touching the end ball across ``gap``."""
+    """A flat wall of infinite mass, touching the end ball across ``gap``: at rest, or,
+    with a ``motion`` w(t), displaced by w(t) from its place (w(0) = 0)."""
 
     stiffness: float
     alpha: float = 1.5
     gap: float = 0.0
     damping: float = 0.0
     damping_exponent: float = 0.0
+    motion: Drive | None = None
 
     def __post_init__(self):
+        if self.motion is not None:
+            if not isinstance(self.motion, Drive):
+                raise ValueError(f"wall motion must be a Drive, got {self.motion!r}")
+            if self.motion(0.0) != 0.0:
+                raise ValueError("a wall's motion starts at its place: w(0) must be 0, "
+                                 f"got {float(self.motion(0.0))!r}")
         for name in ("damping", "damping_exponent"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -122,6 +138,8 @@ class Line:
     ``damping_exponent``, shape (N-1,)). A line of real spheres also records what they
     are, per ball: ``diameter`` and ``material`` (a preset's name, ``""`` for constants
     given explicitly); the solver does not read them, the run file keeps them.
+    ``drives`` are forces prescribed in time, ``(ball, Drive)`` pairs (ball numbered
+    from 0; several on one ball add up), besides the constant ``force``.
     """
 
     mass: np.ndarray
@@ -137,11 +155,19 @@ class Line:
     damping_exponent: np.ndarray | None = None
     diameter: np.ndarray | None = None
     material: np.ndarray | None = None
+    drives: tuple = ()
 
     def __post_init__(self):
         n = self.mass.shape[0]
         if n < 1:
             raise ValueError("a line needs at least one ball")
+        drives = tuple(self.drives)
+        for ball, drive in drives:
+            if isinstance(ball, bool) or int(ball) != ball or not 0 <= ball < n:
+                raise ValueError(f"a drive's ball must be within 0..{n - 1}, got {ball!r}")
+            if not isinstance(drive, Drive):
+                raise ValueError(f"a ball's drive must be a Drive, got {drive!r}")
+        object.__setattr__(self, "drives", tuple((int(b), d) for b, d in drives))
         for name in ("mass", "velocity", "force", "position"):
             a = getattr(self, name)
             if a.shape != (n,):
@@ -175,7 +201,7 @@ class Line:
              velocity=None, k: int | None = None, speed: float = 1.0, force=0.0,
              position=0.0, damping=0.0, damping_exponent=0.0,
              left: Wall | None = None, right: Wall | None = None,
-             diameter=None, material=None) -> Line:
+             diameter=None, material=None, drives=()) -> Line:
         """A line from scalars (every ball or contact alike) or sequences.
 
         The initial velocities are ``velocity`` (one per ball), or the first ``k``
@@ -207,6 +233,7 @@ class Line:
             left=left, right=right,
             diameter=None if diameter is None else _per("diameter", diameter, n),
             material=None if material is None else _names(material, n),
+            drives=drives,
         )
 
     @classmethod
@@ -224,9 +251,23 @@ class Line:
 
     @property
     def has_terminal_state(self) -> bool:
-        """Whether a terminal state can exist: no external force keeps doing work, and
-        the line is not held between two walls."""
-        return not np.any(self.force != 0.0) and not (self.left and self.right)
+        """Whether a terminal state can exist: no external force keeps doing work, no
+        drive, and the line is not held between two walls."""
+        return (not np.any(self.force != 0.0) and not (self.left and self.right)
+                and not self.is_driven)
+
+    @property
+    def is_driven(self) -> bool:
+        """Whether a wall moves or a ball is driven (``drives``)."""
+        return bool(self.drives) or any(w is not None and w.motion is not None
+                                        for w in (self.left, self.right))
+
+    def wall_displacement(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """(w_L(t), w_R(t)): each wall's displacement from its place at times ``t``
+        (0 for a wall at rest, or none); each of the shape of ``t``."""
+        t = np.asarray(t, dtype=float)
+        return tuple(np.zeros(t.shape) if w is None or w.motion is None
+                     else np.asarray(w.motion(t)) for w in (self.left, self.right))
 
     @property
     def is_paper(self) -> bool:
@@ -236,7 +277,7 @@ class Line:
             np.all(self.mass == 1.0) and np.all(self.stiffness == 1.0)
             and np.all(self.alpha == self.alpha[:1]) and not np.any(self.gap)
             and not np.any(self.force) and not np.any(self.position)
-            and not self.is_damped
+            and not self.is_damped and not self.drives
             and np.all((self.velocity == 0.0) | (self.velocity == 1.0))
             and self.left is None and self.right is None)
 
@@ -280,8 +321,9 @@ class Line:
 
         Mass M: the median mass; stiffness K and exponent a: the median contact's
         (walls included; ``params``: ``contact_params()``, if at hand); velocity V: the largest initial speed, or, for a line at
-        rest, the speed a typical force (external, or of the largest overlap) gives
-        over its static compression. Then the time ``T = (M V^(1-a) / K)^(1/(a+1))``
+        rest, a driven wall's typical speed (``Drive.speed``), or else the speed a
+        typical force (external, a drive's, or of the largest overlap) gives over its
+        static compression. Then the time ``T = (M V^(1-a) / K)^(1/(a+1))``
         and length ``V T`` make the force law ``K x^a`` balance ``M x''``: the paper's
         scales (its section 2), which are all 1 for its own line.
         """
@@ -297,10 +339,14 @@ class Line:
             i = int(np.argsort(kappa, kind="stable")[kappa.size // 2])
             k0, a0 = float(kappa[i]), float(alpha[i])
         speed = float(np.max(np.abs(self.velocity)))
+        if speed == 0.0:  # a line at rest moves with its walls' motion
+            speed = max((w.motion.speed for w in self.walls
+                         if w is not None and w.motion is not None), default=0.0)
         if speed == 0.0:
             # a line at rest moves only under its forces or overlaps: their static
             # compression L = (F/K)^(1/a) and the time sqrt(M L / F) give a speed
-            f = float(np.max(np.abs(self.force)))
+            f = max([float(np.max(np.abs(self.force)))]
+                    + [d.size for _, d in self.drives])
             overlap = float(max(np.max(-gap, initial=0.0),
                                 np.max(np.abs(np.diff(self.position)), initial=0.0)))
             if overlap > 0.0:

@@ -120,20 +120,29 @@ def _law_energy(delta: np.ndarray, kappa, alpha) -> np.ndarray:
     return np.asarray(kappa, dtype=float) * e / (np.asarray(alpha, dtype=float) + 1.0)
 
 
-def line_potential_energy(x: np.ndarray, line) -> np.ndarray:
+def line_potential_energy(x: np.ndarray, line, t=None) -> np.ndarray:
     """Energy stored in the contacts (walls included), ``kappa delta_+^(alpha+1) /
     (alpha+1)`` with ``delta_j = x_j - x_{j+1} - g_j``, less the work ``sum f x`` of the
     constant external forces: so that kinetic plus potential energy is conserved.
-    x of shape (..., N)."""
+    x of shape (..., N). A moving wall's contact is compressed by its displacement at
+    the times ``t`` (shape (...)), which such a line needs (``Line.wall_displacement``);
+    what the drives do is their work, not a potential."""
     x = np.asarray(x, dtype=float)
     total = _law_energy(x[..., :-1] - x[..., 1:] - line.gap, line.stiffness,
                         line.alpha).sum(axis=-1)
+    moving = [w is not None and w.motion is not None for w in line.walls]
+    if any(moving):
+        if t is None:
+            raise ValueError("a line whose walls move needs the time of its positions")
+        wl, wr = line.wall_displacement(t)
+    else:
+        wl = wr = 0.0
     if line.left is not None:
         w = line.left
-        total = total + _law_energy(-x[..., 0] - w.gap, w.stiffness, w.alpha)
+        total = total + _law_energy(wl - x[..., 0] - w.gap, w.stiffness, w.alpha)
     if line.right is not None:
         w = line.right
-        total = total + _law_energy(x[..., -1] - w.gap, w.stiffness, w.alpha)
+        total = total + _law_energy(x[..., -1] - wr - w.gap, w.stiffness, w.alpha)
     return total - x @ line.force
 
 
@@ -143,7 +152,7 @@ def baseline_energy(line) -> float:
     positions are not all 0), else 0."""
     if not np.any(line.position):
         return 0.0
-    return float(line_potential_energy(line.position, line))
+    return float(line_potential_energy(line.position, line, 0.0))
 
 
 def impact_energy(line) -> float:
@@ -152,5 +161,5 @@ def impact_energy(line) -> float:
     ``baseline_energy``). K/2 for the paper's line. Every energy share chainrun reports
     is a share of this."""
     start = float(line_kinetic_energy(line.velocity, line.mass)
-                  + line_potential_energy(line.position, line))
+                  + line_potential_energy(line.position, line, 0.0))
     return start - baseline_energy(line)
