@@ -222,7 +222,9 @@ def _drive_place(S):
 def _series_work(S, h):
     """The drives' work over [0, h] of a series step, from the series: the integral
     of the product of the force's series (a wall's contact lane, or a driven ball's
-    drive) and of the velocity's (the wall's, or the ball's), to order PT - 2."""
+    drive; to order PT - 2) and the velocity's (the wall's, or the ball's; to order
+    PT - 1), every product kept: where the force starts at a high order (a ramp's start)
+    a product cut at order PT - 2 would drop terms far above the series' truncation."""
     W = S.TW
     f0 = PT + 1  # row of the forces' f_0
     linear = S.ints[I_MODE] == MODE_LINEAR  # (its force is kappa c: the rows c_k)
@@ -241,15 +243,19 @@ def _series_work(S, h):
                 continue
         mk = S.TR[lane] if lane >= 0 else 0.0
         w = 0.0
-        for k in range(PT - 2, -1, -1):
-            # the power's term of order k: sum_i f_i v_(k-i), v_j = (j + 1) TX[j + 1]
-            pk = 0.0
-            for i in range(k + 1):
-                if lane >= 0:
-                    fi = W[_tw(lane, i)] * mk if linear else W[_tw(lane, f0 + i)]
-                else:
-                    fi = S.dm[d] * S.DT[d, i + 2] * ((i + 1) * (i + 2))
-                pk += fi * (k - i + 1) * S.TX[k - i + 1, p]
-            w = (w + pk / (k + 1)) * h
+        hi = h  # h^(i + 1)
+        for i in range(PT - 1):
+            if lane >= 0:
+                fi = W[_tw(lane, i)] * mk if linear else W[_tw(lane, f0 + i)]
+            else:
+                fi = S.dm[d] * S.DT[d, i + 2] * ((i + 1) * (i + 2))
+            if fi != 0.0:
+                # sum_j v_j h^j / (i + j + 1), v_j = (j + 1) TX[j + 1]: the integral of
+                # f_i s^i times the velocity's series, over h^(i + 1)
+                acc = 0.0
+                for j in range(PT - 1, -1, -1):
+                    acc = acc * h + (j + 1) * S.TX[j + 1, p] / (i + j + 1)
+                w += fi * acc * hi
+            hi *= h
         total += sign * w
     return total
