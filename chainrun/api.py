@@ -83,6 +83,8 @@ _OBSERVABLES = {
                          "external forces", "energy"),
     "momentum": ("momentum of the line, sum m v", "momentum"),
     "dissipated_energy": ("energy the damping dissipated since t = 0", "energy"),
+    "drive_work": ("work the drives (moving walls, forces in time) did since t = 0: "
+                   "kinetic + potential + dissipated = initial + drive_work", "energy"),
 }
 
 
@@ -174,10 +176,12 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     ``side``. Balls and contacts are numbered alike in every variable.
 
     Data variables: ``position`` and ``velocity`` (time, ball); the observables
-    ``kinetic_energy``, ``potential_energy``, ``momentum`` and ``dissipated_energy``
-    (time); the line: ``mass``, ``initial_velocity``, ``initial_position``, ``force``
-    (ball), and for real spheres ``diameter`` and ``material``; ``stiffness``,
-    ``alpha``, ``gap``, ``damping``, ``damping_exponent`` (contact); the walls'
+    ``kinetic_energy``, ``potential_energy``, ``momentum``, ``dissipated_energy`` and
+    ``drive_work`` (time; on a driven line ``kinetic_energy + potential_energy +
+    dissipated_energy - drive_work`` stays at its initial value); the line: ``mass``,
+    ``initial_velocity``, ``initial_position``, ``force`` (ball), and for real
+    spheres ``diameter`` and ``material``; ``stiffness``, ``alpha``, ``gap``,
+    ``damping``, ``damping_exponent`` (contact); the walls'
     ``wall_stiffness``, ``wall_alpha``, ``wall_gap``, ``wall_damping``,
     ``wall_damping_exponent`` (NaN where there is no wall) and what they did,
     ``wall_impulse`` and ``wall_dissipation`` (wall); the results: ``final_position``,
@@ -190,8 +194,9 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     Every quantity has its ``units``: SI (s, m, m/s, kg, N, J, ...) for a run in SI,
     else the paper's. Attributes: the run's parameters (``n``, ``k``, ``alpha``,
     ``rtol``, ``t_end``, ...), its outcome (``outcome``, ``terminal``, ``end_time``,
-    ``message``), its diagnostics (``diagnostics_*``), the line's scales
-    (``scales_*``), the config text and hash, and the writing software's version.
+    ``message``, ``final_drive_work``: the drives' work by ``end_time``), its
+    diagnostics (``diagnostics_*``), the line's scales (``scales_*``), the config text
+    and hash, and the writing software's version.
 
     Raises ``chainrun.errors.StoreError`` (one line) for a file that is not a readable
     chainrun run file.
@@ -211,7 +216,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         "overrides": json.dumps(run.parameters.get("overrides", {})),
         "outcome": run.outcome, "terminal": int(run.terminal), "end_time": run.end_time,
         "message": run.message, "units": "SI" if si else _UNITS,
-        "dissipated_energy": run.dissipated_energy,
+        "dissipated_energy": run.dissipated_energy, "final_drive_work": run.drive_work,
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
         **{f"scales_{k}": v for k, v in scales.items()},
@@ -224,7 +229,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
 #: What differs from run to run of a sweep, kept as variables along ``run``: the
 #: outcome of each, and every diagnostic.
 _PER_RUN = ("outcome", "terminal", "end_time", "message", "dissipated_energy",
-            "config_hash", "n", "k", "alpha")
+            "final_drive_work", "config_hash", "n", "k", "alpha")
 #: Values that fill a run's shorter event log (its events are numbered 0..E-1).
 _EVENT_FILL = {"event_contact": -1, "event_kind": 0}
 

@@ -75,7 +75,7 @@ from chainrun.check import MIN_RTOL, check_rtol
 from chainrun.errors import ConfigError, one_line, show_value
 from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
-from chainrun.solver import DEFAULT_RTOL, Line, Wall
+from chainrun.solver import DEFAULT_RTOL, Drive, Line, Wall
 from chainrun.solver import physics
 from chainrun.solver import restitution as collision
 from chainrun.solver.model import precompress
@@ -228,6 +228,9 @@ __all__ = [
 #: File extensions and the format each one is read as.
 FORMATS = {".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
 
+#: The keys of a sine of a drive (amplitude, frequency in cycles per unit of time, ramp).
+SINE_KEYS = ("amplitude", "frequency", "ramp")
+
 #: Keys a ``[sweep]`` table may vary, and the type of their values.
 SWEEPABLE_KEYS: dict[str, type] = {
     "chain.n": int,
@@ -258,6 +261,7 @@ SWEEPABLE_KEYS: dict[str, type] = {
     "walls.right.damping_exponent": float,
     "walls.right.restitution": float,
     "walls.right.restitution_speed": float,
+    **{f"walls.{side}.motion.{key}": float for side in ("left", "right") for key in SINE_KEYS},
     "solver.rtol": float,
     "solver.t_end": float,
     "solver.max_events": int,
@@ -531,6 +535,211 @@ def _dissipation_issues(model: BaseModel) -> list[_Issue]:
     return issues
 
 
+# --- drives: a wall's motion, forces in time on chosen balls ------------------------------
+
+@dataclass(frozen=True, eq=False)
+class DriveSpec:
+    """A checked drive of an experiment file: ``walls.<side>.motion`` (a displacement)
+    or one entry of ``chain.drive`` (a force on ``ball``, numbered from 1).
+
+    ``table`` is what the file holds, as canonical JSON (a file's table gains the
+    sha256 of its data, as a generator's does); ``drive`` the function of time
+    (``chainrun.solver.Drive``)."""
+
+    table: str
+    drive: Drive
+    ball: int | None = None
+    index: int | None = None  # its place in a list of them (chain.drive)
+
+    def to_json(self) -> Any:
+        return json.loads(self.table)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, DriveSpec) and (self.table, self.ball) == (other.table,
+                                                                           other.ball)
+
+    def __hash__(self) -> int:
+        return hash((self.table, self.ball))
+
+    @property
+    def sine(self) -> bool:
+        """Whether it is one sine table (whose keys a sweep may vary)."""
+        table = self.to_json()
+        return isinstance(table, Mapping) and "file" not in table
+
+
+def _number_issue(table: Mapping, key: str, sub: tuple[str, ...], low: float | None = None,
+                  strict: bool = True) -> tuple[float | None, list[_Issue]]:
+    """``table[key]`` as a finite number (above ``low``), or the issue."""
+    try:
+        x = _check_float(table[key])
+    except PydanticCustomError as exc:
+        return None, [i._replace(sub=sub + (key,)) for i in exc.context["issues"]]
+    if low is not None and (x <= low if strict else x < low):
+        op = ">" if strict else ">="
+        return None, [_Issue(f"must be {op} {_bound(low)}, got {show_value(table[key])}",
+                             sub + (key,))]
+    return x, []
+
+
+def _drive_table(table: Any, sub: tuple[str, ...], base_dir: str, what: str,
+                 ball: bool) -> tuple[dict | None, Any, list[_Issue]]:
+    """One table of a drive: a sine ``{amplitude, frequency, ramp}`` or ``{file}`` (with
+    ``ball`` in ``chain.drive``). Returns its JSON form, a ``Sine`` or the samples
+    ``(times, values)``, and its issues."""
+    shape = "{ball, amplitude, frequency, ramp}" if ball else "{amplitude, frequency, ramp}"
+    if not isinstance(table, Mapping):
+        return None, None, [_Issue(f"expected a table {shape} or {{file}}, got "
+                                   f"{show_value(table)}", sub)]
+    keys = [str(k) for k in table]
+    allowed = (("file",) if "file" in keys else SINE_KEYS) + (("ball",) if ball else ())
+    alone = " (a drive from a file takes no other key)" if "file" in keys else ""
+    issues = [_Issue(f"unknown key{_suggest(k, list(allowed)) or alone}",
+                     sub + (_key_text(k),)) for k in keys if k not in allowed]
+    out: dict[str, Any] = {}
+    if ball:
+        if "ball" not in table:
+            issues.append(_Issue("required (the driven ball, from 1)", sub + ("ball",)))
+        else:
+            try:
+                number = _check_int(table["ball"])
+            except PydanticCustomError as exc:
+                issues += [i._replace(sub=sub + ("ball",)) for i in exc.context["issues"]]
+            else:
+                if number < 1:
+                    issues.append(_Issue(f"must be a ball number >= 1, got {number}",
+                                         sub + ("ball",)))
+                out["ball"] = number
+    if "file" in keys:
+        try:
+            name = _check_str(table["file"])
+        except PydanticCustomError as exc:
+            return None, None, issues + [i._replace(sub=sub + ("file",))
+                                         for i in exc.context["issues"]]
+        path = os.path.join(base_dir, name)
+        try:
+            rows = generators.read_rows(path, 2)
+            digest = generators.digest(path)
+        except FileNotFoundError:
+            return None, None, issues + [_Issue(f"no such file {path}", sub + ("file",))]
+        except (OSError, ValueError, UnicodeDecodeError) as exc:
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+            return None, None, issues + [_Issue(f"cannot read {path}: {reason}",
+                                                sub + ("file",))]
+        t, u = rows[:, 0], rows[:, 1]
+        problem = None
+        if t.size < 2:
+            problem = f"{path} holds {t.size} rows: a drive needs at least two (time, {what})"
+        elif not (np.all(np.isfinite(t)) and np.all(np.isfinite(u))):
+            problem = f"{path} holds a value that is not finite"
+        elif t[0] != 0.0:
+            problem = f"{path}: the first time must be 0, got {float(t[0])!r}"
+        elif np.any(np.diff(t) <= 0.0):
+            i = int(np.flatnonzero(np.diff(t) <= 0.0)[0]) + 1
+            problem = (f"{path}: times must increase, got {float(t[i])!r} after "
+                       f"{float(t[i - 1])!r} (row {i + 1})")
+        elif what == "displacement" and u[0] != 0.0:
+            problem = (f"{path}: the wall starts at its place, so its displacement at t = 0 "
+                       f"must be 0, got {float(u[0])!r}")
+        if problem:
+            return None, None, issues + [_Issue(problem, sub + ("file",))]
+        out.update(file=name, sha256=digest)
+        return (out, (t, u), issues) if not issues else (None, None, issues)
+    got: dict[str, float] = {}
+    for key, low, strict in (("amplitude", None, True), ("frequency", 0.0, True),
+                             ("ramp", 0.0, False)):
+        if key not in table:
+            if key != "ramp":
+                issues.append(_Issue("required", sub + (key,)))
+            continue
+        x, found = _number_issue(table, key, sub, low, strict)
+        issues += found
+        if x is not None:
+            got[key] = x
+    if issues:
+        return None, None, issues
+    out.update(got)
+    from chainrun.solver import Sine
+
+    return out, Sine(got["amplitude"], got["frequency"], got.get("ramp", 0.0)), []
+
+
+def _check_drive(value: Any, base_dir: str, what: str) -> DriveSpec:
+    """``walls.<side>.motion``: a sine table, a list of them (their sum), or ``{file}``."""
+    if isinstance(value, DriveSpec):
+        return value
+    tables = value if isinstance(value, (list, tuple)) else [value]
+    if isinstance(value, (list, tuple)) and not value:
+        raise _fail([_Issue("expected a table or a non-empty list of tables")])
+    listed = isinstance(value, (list, tuple))
+    issues: list[_Issue] = []
+    parts = []
+    for i, table in enumerate(tables):
+        sub = (f"[{i}]",) if listed else ()
+        out, part, found = _drive_table(table, sub, base_dir, what, False)
+        issues += found
+        if listed and isinstance(part, tuple):
+            issues.append(_Issue("a file drives alone: give {file} without a list", sub))
+        parts.append((out, part))
+    if issues:
+        raise _fail(issues)
+    if isinstance(parts[0][1], tuple):
+        drive = Drive.from_samples(*parts[0][1])
+    else:
+        drive = Drive.of_sines([p for _, p in parts])
+    table = [o for o, _ in parts] if listed else parts[0][0]
+    return DriveSpec(json.dumps(table, sort_keys=True), drive)
+
+
+def _check_ball_drives(value: Any, base_dir: str) -> tuple[DriveSpec, ...]:
+    """``chain.drive``: a table ``{ball, amplitude, frequency, ramp}`` or ``{ball, file}``,
+    or a list of them (several on one ball add up)."""
+    if isinstance(value, tuple) and all(isinstance(v, DriveSpec) for v in value):
+        return value
+    listed = isinstance(value, (list, tuple))
+    tables = value if listed else [value]
+    if listed and not value:
+        raise _fail([_Issue("expected a table or a non-empty list of tables")])
+    issues: list[_Issue] = []
+    specs = []
+    for i, table in enumerate(tables):
+        sub = (f"[{i}]",) if listed else ()
+        out, part, found = _drive_table(table, sub, base_dir, "force", True)
+        issues += found
+        if found:
+            continue
+        drive = Drive.from_samples(*part) if isinstance(part, tuple) else Drive.of_sines([part])
+        specs.append(DriveSpec(json.dumps({k: v for k, v in out.items() if k != "ball"},
+                                          sort_keys=True), drive, out["ball"],
+                               i if listed else None))
+    if issues:
+        raise _fail(issues)
+    return tuple(specs)
+
+
+def _drive_validator(what: str):
+    def check(value: Any, info: ValidationInfo) -> Any:
+        if value is None:
+            return None
+        base = (info.context or {}).get("base_dir", ".")
+        if what == "force":
+            return _check_ball_drives(value, base)
+        return _check_drive(value, base, what)
+
+    return BeforeValidator(check)
+
+
+def _dump_drive(value: Any) -> Any:
+    if isinstance(value, DriveSpec):
+        return value.to_json()
+    if isinstance(value, tuple):
+        return [{"ball": v.ball, **v.to_json()} for v in value]
+    return value
+
+
+_DumpDrive = PlainSerializer(_dump_drive)
+
+
 class Chain(BaseModel):
     """The line of balls: ``n`` balls; their masses, contacts (stiffness, exponent
     ``alpha``, gap), initial velocities (the first ``k`` at ``speed``, or ``velocity``
@@ -563,6 +772,7 @@ class Chain(BaseModel):
     restitution: Annotated[Any, _values("restitution"), _Dump] = None
     damping_law: _OptLaw = None
     restitution_speed: _OptFloat = Field(None, gt=0)
+    drive: Annotated[Any, _drive_validator("force"), _DumpDrive] = None
 
     @field_validator("k")
     @classmethod
@@ -619,7 +829,8 @@ class WallSettings(BaseModel):
     """A flat wall at one end of the line: its contact with the end ball has a
     stiffness, an exponent and a gap; or, in SI, the wall is of a ``material``. Its
     damping is given as a chain's is (``damping`` and ``damping_exponent``, or
-    ``restitution`` with ``damping_law``), one value for its one contact."""
+    ``restitution`` with ``damping_law``), one value for its one contact. A ``motion``
+    (a ``DriveSpec``) moves it about its place."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -632,6 +843,7 @@ class WallSettings(BaseModel):
     restitution: _OptFloat = Field(None, gt=0, le=1)
     damping_law: _OptLaw = None
     restitution_speed: _OptFloat = Field(None, gt=0)
+    motion: Annotated[Any, _drive_validator("displacement"), _DumpDrive] = None
 
     @field_validator("material", mode="before")
     @classmethod
@@ -847,6 +1059,19 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
                 continue
             alpha = chain.alpha
         built[side] = Wall(1.0 if spec.stiffness is None else spec.stiffness, alpha, spec.gap)
+    for side, wall in built.items():
+        spec = getattr(walls, side)
+        if spec.motion is not None:
+            built[side] = replace(wall, motion=spec.motion.drive)
+    if chain.drive is not None:
+        drives = []
+        for i, spec in enumerate(chain.drive):
+            if spec.ball > n:
+                where = ("chain.drive.ball" if spec.index is None
+                         else f"chain.drive[{spec.index}].ball")
+                problems.append(_Problem(where, f"ball {spec.ball} is beyond chain.n ({n})"))
+            drives.append((spec.ball - 1, spec.drive))
+        line_kw["drives"] = drives
     if problems:
         raise LineError(problems)
     try:
@@ -955,6 +1180,12 @@ def _needs_t_end(chain: Chain, walls: "Walls", t_end: float | None) -> list["_Pr
         reasons.append("chain.force keeps doing work")
     if walls.left is not None and walls.right is not None:
         reasons.append("the line is held between two walls")
+    for side in ("left", "right"):
+        wall = getattr(walls, side)
+        if wall is not None and wall.motion is not None:
+            reasons.append(f"walls.{side}.motion drives it")
+    if chain.drive is not None:
+        reasons.append("chain.drive drives it")
     if not reasons:
         return []
     return [_Problem("solver.t_end", f"required: {' and '.join(reasons)}, so the run "
@@ -1263,9 +1494,12 @@ def _run_id(overrides: Mapping[str, Any]) -> str:
 
 
 def _table(value: Any) -> Any:
-    """A generator table as a plain dict (a checked one, ``Values``, is JSON text)."""
+    """A generator table as a plain dict (a checked one, ``Values``, is JSON text), and
+    a checked drive as the table or list the file holds."""
     if isinstance(value, Values) and value.table is not None:
         return json.loads(value.table)
+    if isinstance(value, DriveSpec):
+        return value.to_json()
     return value
 
 
@@ -1728,9 +1962,11 @@ def _line_problems(merged: Mapping[str, Any], overrides: Mapping[str, Any],
     return [p._replace(involves=p.involves | involves) for p in problems]
 
 
-def _generator_sweep_issues(valid: dict[str, tuple], chain: Any) -> list[_Issue]:
-    """Sweeps of a generator's field, or replicas, on a chain without such a table
-    (the entries are dropped from ``valid``)."""
+def _generator_sweep_issues(valid: dict[str, tuple], chain: Any,
+                            walls: Any = None) -> list[_Issue]:
+    """Sweeps of a generator's field, or replicas, on a chain without such a table, and
+    of a wall motion's key where the motion is not one sine (the entries are dropped
+    from ``valid``)."""
     issues = []
     for key in list(valid):
         generator = _generator_key(key)
@@ -1740,6 +1976,16 @@ def _generator_sweep_issues(valid: dict[str, tuple], chain: Any) -> list[_Issue]
                                  f"(e.g. {{random = \"uniform\", ..., seed = 1}}): "
                                  f"there is no {generator[1]} to sweep", (key,)))
             valid.pop(key)
+    for key in list(valid):
+        parts = key.split(".")
+        if len(parts) == 4 and parts[2] == "motion" and isinstance(walls, Mapping):
+            wall = walls.get(parts[1])
+            motion = _table(wall.get("motion")) if isinstance(wall, Mapping) else None
+            if not (isinstance(motion, Mapping) and "file" not in motion):
+                issues.append(_Issue(f"walls.{parts[1]}.motion is not one sine table "
+                                     f"{{amplitude, frequency, ramp}}: there is no "
+                                     f"{parts[3]} to sweep", (key,)))
+                valid.pop(key)
     if "replica" in valid and isinstance(chain, Mapping) and not _random_keys(chain):
         issues.append(_Issue("the chain draws no random values (a table with random = "
                              "...): its replicas would be one run", (REPLICAS,)))
@@ -1759,7 +2005,7 @@ def _validate(data: Any, source: str, to_run: bool = True) -> Experiment:
     # data files named by the experiment are relative to its folder
     context = {"base_dir": os.path.dirname(os.path.abspath(source))}
     valid, named, sweep_issues = _check_sweep(data.get("sweep"))
-    sweep_issues += _generator_sweep_issues(valid, data.get("chain"))
+    sweep_issues += _generator_sweep_issues(valid, data.get("chain"), data.get("walls"))
     base = {key: value for key, value in data.items() if key != "sweep"}
     keys = list(valid)
 

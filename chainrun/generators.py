@@ -43,7 +43,8 @@ import numpy as np
 
 from chainrun.errors import show_value
 
-__all__ = ["BASES", "Values", "ValuesError", "check", "expand", "is_uniform"]
+__all__ = ["BASES", "Values", "ValuesError", "check", "digest", "expand", "is_uniform",
+           "read_rows"]
 
 #: The base of a generator table and the keys each takes (besides ``impurity``).
 BASES: dict[str, tuple[str, ...]] = {
@@ -140,6 +141,54 @@ def _read(path: str) -> np.ndarray:
     if data.dtype.kind not in "iuf":
         raise ValueError(f"holds {data.dtype} values, not numbers")
     return data.astype(float).reshape(-1)
+
+
+def read_rows(path: str, columns: int) -> np.ndarray:
+    """The rows of a data file, shape (M, columns): a ``.npy`` array of that shape, or
+    a text file (``.csv``, ``.txt``) of one row a line, its numbers separated by commas
+    or spaces (``#`` starts a comment; a first line of text is a header).
+
+    Raises
+    ------
+    OSError, ValueError
+        The file cannot be read, or a row is not ``columns`` numbers (naming its line).
+    """
+    if path.lower().endswith(".npy"):
+        data = np.asarray(np.load(path, allow_pickle=False))
+        if data.dtype.kind not in "iuf" or data.ndim != 2 or data.shape[1] != columns:
+            raise ValueError(f"holds an array of {data.dtype} and shape {data.shape}, not "
+                             f"rows of {columns} numbers")
+        return data.astype(float)
+    rows = []
+    with open(path, encoding="utf-8") as handle:
+        for number, line in enumerate(handle, start=1):
+            words = line.split("#", 1)[0].replace(",", " ").split()
+            if not words:
+                continue
+            try:
+                row = [float(w) for w in words]
+            except ValueError:
+                if not rows and number == _first_line(path):
+                    continue  # a header
+                raise ValueError(f"line {number}: not a row of numbers") from None
+            if len(row) != columns:
+                raise ValueError(f"line {number}: {len(row)} numbers, expected {columns}")
+            rows.append(row)
+    return np.array(rows, dtype=float).reshape(-1, columns)
+
+
+def _first_line(path: str) -> int:
+    """The number of the first line of a text file that is not blank or a comment."""
+    with open(path, encoding="utf-8") as handle:
+        for number, line in enumerate(handle, start=1):
+            if line.split("#", 1)[0].strip():
+                return number
+    return 0
+
+
+def digest(path: str) -> str:
+    """The sha256 of a file's bytes, as hex."""
+    return _digest(path)
 
 
 def _digest(path: str) -> str:

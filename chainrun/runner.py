@@ -82,10 +82,11 @@ class RunSummary:
     message: str
     final_velocity: np.ndarray
     skipped: bool = False
-    dissipated: float = 0.0  # share of the impact energy the damping took
+    dissipated: float = 0.0  # share of the energy taken up that the damping took
     units: str = "paper"  # the run's units: "paper" or "si"
     check: Check | None = None  # the conditioning check, if the run had one
     speed: float = 1.0  # the line's impact speed (largest initial speed)
+    driven: bool = False  # the line is driven: it took up its impact and the drives' work
 
     def line(self) -> str:
         """One line: how the run ended, its cost and its conservation errors (and,
@@ -101,7 +102,8 @@ class RunSummary:
             how = self.message
         text = (f"{how}, {self.events} events, {self.steps} steps, "
                 f"{momentum_text(self.momentum_error)}, |dE|/E = {self.energy_error:.1e}, "
-                + (f"dissipated {self.dissipated:.1%} of the impact energy, "
+                + (f"dissipated {self.dissipated:.1%} of the "
+                   f"{'energy taken up' if self.driven else 'impact energy'}, "
                    if self.dissipated else "")
                 + f"{self.wall_time:.2f} s"
                 + (f"; {self.check.line(self.speed)}" if self.check is not None else ""))
@@ -239,8 +241,8 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         momentum_error=d.momentum_error, energy_error=d.energy_error,
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
-        dissipated=_share(sol.dissipated_energy, line), units=spec.units,
-        check=check, speed=_speed(line),
+        dissipated=_share(sol.dissipated_energy, line, sol.drive_energy), units=spec.units,
+        check=check, speed=_speed(line), driven=line.is_driven,
     )
 
 
@@ -275,12 +277,13 @@ def _speed(line) -> float:
     return float(np.max(np.abs(line.velocity), initial=0.0)) or 1.0
 
 
-def _share(dissipated: float, line) -> float:
-    """``dissipated`` as a share of the line's impact energy (0 without either)."""
+def _share(dissipated: float, line, work: float = 0.0) -> float:
+    """``dissipated`` as a share of the energy the line took up: its impact energy,
+    plus the drives' ``work`` on a driven line (0 without either, or if none)."""
     from chainrun.solver.physics import impact_energy
 
-    impact = impact_energy(line) if dissipated else 0.0
-    return dissipated / impact if impact else 0.0
+    taken = impact_energy(line) + work if dissipated else 0.0
+    return dissipated / taken if taken > 0.0 else 0.0
 
 
 def read_summary(path, spec: RunSpec) -> RunSummary:
@@ -302,8 +305,8 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
-        dissipated=_share(run.dissipated_energy, run.line), units=run.units,
-        check=run.check, speed=_speed(run.line),
+        dissipated=_share(run.dissipated_energy, run.line, run.drive_work), units=run.units,
+        check=run.check, speed=_speed(run.line), driven=run.line.is_driven,
     )
 
 

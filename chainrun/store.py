@@ -47,7 +47,7 @@ import chainrun
 from chainrun import atomic
 from chainrun.check import Check
 from chainrun.errors import StoreError
-from chainrun.solver import EventKind, Line, Solution, Wall
+from chainrun.solver import Drive, EventKind, Line, Solution, Wall
 from chainrun.solver import physics
 from chainrun.units import UNITS
 
@@ -614,6 +614,15 @@ class RunWriter:
                 if wall.damping:
                     g.attrs["damping"] = np.float64(wall.damping)
                     g.attrs["damping_exponent"] = np.float64(wall.damping_exponent)
+                if wall.motion is not None:
+                    _write_drive(_group(g, "motion"), wall.motion, units["position"],
+                                 units["time"])
+        if line.drives:
+            drives = _group(model, "drives")
+            for i, (ball, drive) in enumerate(line.drives):
+                g = _group(drives, str(i))
+                g.attrs["ball"] = np.int64(ball + 1)
+                _write_drive(g, drive, units["force"], units["time"])
         scales = _group(model, "scales")
         sc = line.scales()
         for name in ("mass", "length", "time", "velocity", "force"):
@@ -654,7 +663,7 @@ class RunWriter:
             line = self._line
             values = {
                 "kinetic_energy": physics.line_kinetic_energy(v, line.mass),
-                "potential_energy": physics.line_potential_energy(x, line),
+                "potential_energy": physics.line_potential_energy(x, line, t),
                 "momentum": physics.line_momentum(v, line.mass),
             }
         for name, element in self._observables.items():
@@ -786,7 +795,8 @@ class RunWriter:
     def _write_dissipation(self, h5: h5py.File, results: h5py.Group, sol: Solution,
                            wall: h5py.Dataset) -> None:
         """What the damping dissipated (0 on an elastic line): by each snapshot (an
-        observable beside the energies), in total, and by each contact and wall."""
+        observable beside the energies), in total, and by each contact and wall; and
+        likewise the work the drives did (0 on a line without them)."""
         n, energy = self._n, UNITS[self._units]["energy"]
         times = np.asarray(sol.times, dtype=np.float64)
         element = _Element(h5["observables"], "dissipated_energy", (), [],
@@ -801,6 +811,18 @@ class RunWriter:
         element.time.attrs["unit"] = UNITS[self._units]["time"]
         results.attrs["dissipated_energy"] = np.float64(sol.dissipated_energy)
         results.attrs["dissipated_energy_unit"] = energy
+        element = _Element(h5["observables"], "drive_work", (), [], len(times),
+                           "work the drives (moving walls, forces in time) did since t = 0")
+        work = np.asarray(sol.drive_work, dtype=np.float64)
+        if work.size != times.size:  # a line without drives
+            work = np.zeros(times.size)
+        for i, (t, w) in enumerate(zip(times, work)):
+            element.append(i, float(t), float(w))
+        element.flush()
+        element.value.attrs["unit"] = energy
+        element.time.attrs["unit"] = UNITS[self._units]["time"]
+        results.attrs["drive_work"] = np.float64(sol.drive_energy)
+        results.attrs["drive_work_unit"] = energy
         contact = _scale(results, "contact", np.arange(1, n, dtype=np.int64),
                          "contact j = 1..N-1 joins balls j and j+1")
         per = np.asarray(sol.contact_dissipation, dtype=np.float64)
@@ -920,9 +942,10 @@ class RunData:
     positions, velocities : Snapshots, shape (T, N)
         Read lazily; ``np.asarray`` loads all.
     observables : dict of ndarray, shape (T,)
-        ``kinetic_energy``, ``potential_energy``, ``momentum`` and
+        ``kinetic_energy``, ``potential_energy``, ``momentum``,
         ``dissipated_energy`` (the energy the damping took by then; 0 on an elastic
-        line) at each snapshot.
+        line) and ``drive_work`` (the work the drives did by then; 0 on a line without
+        them) at each snapshot.
     final_position, final_velocity, separation_time, separation_velocity : ndarray, shape (N,)
     event_time : ndarray, shape (E,)
     event_contact : ndarray of int64, shape (E,)
@@ -942,7 +965,9 @@ class RunData:
         ``gap``, ``damping``, ``damping_exponent`` (shape (N-1,)); for real spheres
         ``diameter`` and ``material`` (shape (N,); None otherwise); ``walls``
         ({"left"/"right": {"stiffness", "alpha", "gap", "damping",
-        "damping_exponent"}}, the walls present) and ``scales`` (mass, length, time, velocity,
+        "damping_exponent", "motion"}}, the walls present; a moving wall's ``motion`` a
+        ``chainrun.solver.Drive``), ``drives`` (``(ball, Drive)`` pairs, balls from 0)
+        and ``scales`` (mass, length, time, velocity,
         force: the paper's units of this line, in its units). None for files written
         before the model was recorded: those hold the paper's line.
     sensor_balls : ndarray of int64, shape (S,)
@@ -963,6 +988,8 @@ class RunData:
         The conditioning check (``solver.check``, ``--check``): the check run's
         tolerance, outcome and time, and the spread of each ball's final and separation
         velocity; None for a run without one.
+    drive_work : float
+        The work the drives did by ``end_time`` (0 on a line without them).
     """
 
     path: Path
@@ -997,6 +1024,7 @@ class RunData:
     wall_dissipation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
     wall_impulse: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
     check: Check | None = None
+    drive_work: float = 0.0
 
     @property
     def n(self) -> int:
@@ -1012,7 +1040,7 @@ class RunData:
         walls = {side: Wall(**wall) for side, wall in model["walls"].items()}
         return Line(**{key: model[key] for key in (
             "mass", "stiffness", "alpha", "gap", "velocity", "force", "position",
-            "damping", "damping_exponent", "diameter", "material")}, **walls)
+            "damping", "damping_exponent", "diameter", "material", "drives")}, **walls)
 
     @property
     def impact_energy(self) -> float:
@@ -1125,6 +1153,10 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
     observables["dissipated_energy"] = (
         _get(h5, "observables/dissipated_energy/value")[()]
         if "dissipated_energy" in h5["observables"] else np.zeros(times.shape))
+    # written since drives exist: none before
+    observables["drive_work"] = (
+        _get(h5, "observables/drive_work/value")[()]
+        if "drive_work" in h5["observables"] else np.zeros(times.shape))
     res = _get(h5, "results")
     ev = _get(h5, "events")
     diag = _get(h5, "diagnostics")
@@ -1153,6 +1185,7 @@ def _read_run(h5: h5py.File, path: Path, version: int) -> RunData:
         diagnostics={key: _py(value) for key, value in diag.attrs.items()},
         model=_read_model(h5),
         check=_read_check(res, diag),
+        drive_work=float(res.attrs.get("drive_work", 0.0)),
         **_read_sensors(h5),
         **_read_walls(res, int(params["n"]), version),
     )
@@ -1195,6 +1228,12 @@ def _read_model(h5: h5py.File) -> dict[str, Any] | None:
                              for key in ("stiffness", "alpha", "gap", "damping",
                                          "damping_exponent")}
                       for side in ("left", "right") if side in walls}
+    for side, wall in model["walls"].items():
+        g = walls[side]
+        wall["motion"] = _read_drive(g["motion"]) if "motion" in g else None
+    drives = group["drives"] if "drives" in group else {}
+    model["drives"] = tuple((int(_attr(drives[key], "ball")) - 1, _read_drive(drives[key]))
+                            for key in sorted(drives, key=int))
     model["scales"] = {key: float(value) for key, value in _get(group, "scales").attrs.items()}
     return model
 
@@ -1209,6 +1248,28 @@ def _read_check(res: h5py.Group, diag: h5py.Group) -> Check | None:
                  wall_time=float(diag.attrs.get("check_wall_time", np.nan)),
                  final_velocity_spread=_get(res, "final_velocity_spread")[()],
                  separation_velocity_spread=_get(res, "separation_velocity_spread")[()])
+def _write_drive(group: h5py.Group, drive: Drive, unit: str, time_unit: str) -> None:
+    """A drive (``chainrun.solver.Drive``) in ``group``: its sines (``amplitude``,
+    ``frequency``, ``ramp``, one entry each) or its samples (``time``, ``value``)."""
+    if drive.times is not None:
+        group.attrs["kind"] = "samples"
+        for name, data, u in (("time", drive.times, time_unit), ("value", drive.values, unit)):
+            group.create_dataset(name, data=np.asarray(data, dtype=np.float64)).attrs["unit"] = u
+        return
+    group.attrs["kind"] = "sines"
+    for name, u in (("amplitude", unit), ("frequency", f"1/{time_unit}"),
+                    ("ramp", time_unit)):
+        data = np.array([getattr(sine, name) for sine in drive.sines], dtype=np.float64)
+        group.create_dataset(name, data=data).attrs["unit"] = u
+
+
+def _read_drive(group: h5py.Group) -> Drive:
+    if _as_str(_attr(group, "kind")) == "samples":
+        return Drive.from_samples(_get(group, "time")[()], _get(group, "value")[()])
+    return Drive.of_sines([dict(amplitude=float(a), frequency=float(f), ramp=float(r))
+                           for a, f, r in zip(_get(group, "amplitude")[()],
+                                              _get(group, "frequency")[()],
+                                              _get(group, "ramp")[()])])
 
 
 def _read_sensors(h5: h5py.File) -> dict:

@@ -10,7 +10,11 @@ behind* otherwise. Energies are shares of the impact energy
 energy of the rebounding, ejected and left-behind balls at the end, the energy still
 in the contacts and walls (above the static state a precompressed line starts in,
 less the work of the external forces), and the energy the damping dissipated. They
-add up to 100%, to the run's energy error.
+add up to 100%, to the run's energy error. On a driven line (a moving wall, forces
+prescribed in time) the shares are of the energy the line took up by the end: its
+impact energy (0 without strikers) plus the drives' work by then
+(``RunData.drive_work``), which the same shares add up to; a line that took up no
+energy has none.
 """
 
 from __future__ import annotations
@@ -51,10 +55,11 @@ class RunSummary:
     ``forward`` and ``backward`` are (ball number, 1-based; final velocity) of the
     ball with the largest forward (towards ball N) and backward final velocity, or
     None where no ball moves that way. ``events`` counts the logged events by
-    ``EventKind`` name. ``impact`` is the impact energy and ``energy`` the shares of
-    it (``SHARES``) at the end. ``dissipating`` is the contact (1-based) that
-    dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is the run's
-    conditioning check (``chainrun.check.Check``), None for a run without one.
+    ``EventKind`` name. ``impact`` is the impact energy, ``drive_work`` the drives'
+    work by the end (0 without drives), and ``energy`` the shares (``SHARES``) of
+    their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
+    (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
+    the run's conditioning check (``chainrun.check.Check``), None for a run without one.
     """
 
     path: str
@@ -86,6 +91,7 @@ class RunSummary:
     left_behind: int
     impact: float
     energy: dict[str, float]
+    drive_work: float
     dissipating: int
     snapshots: int
     sensors: int
@@ -99,7 +105,8 @@ class RunSummary:
     @property
     def dissipated(self) -> float:
         """The energy the damping took (0 on an elastic line)."""
-        return self.energy["dissipated"] * self.impact if self.impact else 0.0
+        taken = self.impact + self.drive_work
+        return self.energy["dissipated"] * taken if taken > 0.0 else 0.0
 
 
 def _span(a: np.ndarray, fmt) -> str:
@@ -154,6 +161,11 @@ def describe_line(line, units: str) -> str:
                 + f" (exponent {w.damping_exponent:g})" if w.damping else "") + ")"
              for side, w in (("left", line.left), ("right", line.right)) if w is not None]
     parts.append("walls: " + (", ".join(walls) if walls else "none"))
+    for side, w in (("left", line.left), ("right", line.right)):
+        if w is not None and w.motion is not None:
+            parts.append(f"the {side} wall moves by {w.motion.describe()}")
+    for ball, drive in line.drives:
+        parts.append(f"ball {ball + 1} driven by a force {drive.describe()}")
     return "; ".join(parts)
 
 
@@ -169,12 +181,15 @@ def summarize(run) -> RunSummary:
     back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
     impact = run.impact_energy
-    stored = float(line_potential_energy(run.final_position, line)) - run.baseline_energy
+    work = float(run.drive_work)
+    taken = impact + work
+    stored = (float(line_potential_energy(run.final_position, line, run.end_time))
+              - run.baseline_energy)
     amounts = {name: float(line_kinetic_energy(np.where(mask, v, 0.0), line.mass))
                for name, mask in (("rebound", back), ("ejected", ahead),
                                   ("left behind", behind))}
     amounts |= {"contacts": stored, "dissipated": float(run.dissipated_energy)}
-    energy = {name: (amount / impact if impact else math.nan)
+    energy = {name: (amount / taken if taken > 0.0 else math.nan)
               for name, amount in amounts.items()}
     kinds = np.asarray(run.event_kind)
     d = run.diagnostics
@@ -209,6 +224,7 @@ def summarize(run) -> RunSummary:
         left_behind=int(behind.sum()),
         impact=impact,
         energy=energy,
+        drive_work=work,
         dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),

@@ -38,6 +38,9 @@ def _shares(s) -> str:
     from chainrun.units import format_value
 
     if not math.isfinite(s.energy["rebound"]):
+        if s.drive_work:
+            return ("no energy taken up to share (the impact energy and the drives' work "
+                    f"add up to {format_value(s.impact + s.drive_work, 'energy', s.units)})")
         return "no impact energy to share (the line starts at rest)"
     energy = dict(s.energy)
     if not s.terminal:
@@ -47,6 +50,10 @@ def _shares(s) -> str:
     shares = ", ".join(f"{names[name]} {share:.2%}" for name, share in energy.items()
                        if name != "dissipated" or share)
     when = "" if s.terminal else f" at t = {format_value(s.end_time, 'time', s.units, 6)}"
+    if s.drive_work:
+        return (f"of the energy taken up{when}, the impact's "
+                f"{format_value(s.impact, 'energy', s.units)} and the drives' work "
+                f"{format_value(s.drive_work, 'energy', s.units)}: {shares}")
     return f"of the impact energy {format_value(s.impact, 'energy', s.units)}{when}: {shares}"
 
 

@@ -253,17 +253,19 @@ def _final(run, figure: Figure, axes, log: bool) -> None:
 
 
 def _energy(run, figure: Figure, axes) -> None:
-    """Kinetic, contact and dissipated energy and their sum, which the energy balance
-    keeps at the initial energy."""
+    """Kinetic, contact and dissipated energy, the drives' work on a driven line, and
+    the balance, kinetic + contact + dissipated less the drives' work, which stays at
+    the initial energy."""
     _snapshots_needed(run, "energy", 2)
     obs = run.observables
     # measured from the static state a precompressed line starts in: its contacts'
     # energy there is the impact's, and the sum is the impact energy
     kinetic, stored = obs["kinetic_energy"], obs["potential_energy"] - run.baseline_energy
     dissipated = obs["dissipated_energy"]
-    total = kinetic + stored + dissipated
+    work = obs.get("drive_work", np.zeros_like(kinetic))
+    total = kinetic + stored + dissipated - work
     label, scaled = axis_label("energy", "energy", run.units,
-                               np.concatenate([kinetic, stored, total]))
+                               np.concatenate([kinetic, stored, total, work]))
     t = _time_axis(axes, run, run.times)(run.times)
     contacts = "in contacts and walls"
     if np.any(run.line.position):
@@ -274,8 +276,10 @@ def _energy(run, figure: Figure, axes) -> None:
     axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
     if np.any(dissipated):
         axes.plot(t, scaled(dissipated), label="dissipated", gid="dissipated_energy")
-    axes.plot(t, scaled(total), label="sum", color="black", linestyle="-", linewidth=1.4,
-              gid="total_energy")
+    if np.any(work):
+        axes.plot(t, scaled(work), label="the drives' work", gid="drive_work")
+    axes.plot(t, scaled(total), label="sum less the drives' work" if np.any(work) else "sum",
+              color="black", linestyle="-", linewidth=1.4, gid="total_energy")
     axes.set_ylabel(label)
     axes.legend(fontsize="small")
 

@@ -328,7 +328,8 @@ SWEEP_VALUES = {
     **{key: st.floats(-1e308, 1e308) | st.sampled_from([5e-324, 1e300, 0.0])
        for key in SWEEPABLE_KEYS if key.split(".")[-1] in (
            "mass", "stiffness", "gap", "force", "speed", "precompression", "diameter", "alpha",
-           "damping", "damping_exponent", "restitution", "restitution_speed")
+           "damping", "damping_exponent", "restitution", "restitution_speed", "amplitude",
+           "frequency", "ramp")
        and key != "chain.alpha"},
     "solver.rtol": st.floats(1e-15, 1e-3) | st.sampled_from([1e-15, 1.0000000000000002e-15]),
     "solver.t_end": st.floats(5e-324, 1.7976931348623157e308) | st.sampled_from([5e-324, 1e-300]),

@@ -161,6 +161,7 @@ def test_observables_match_the_formulas(run):
         "potential_energy": (c ** (alpha + 1)).sum(axis=1) / (alpha + 1),
         "momentum": v.sum(axis=1),
         "dissipated_energy": np.zeros(len(spec.times)),  # an elastic line
+        "drive_work": np.zeros(len(spec.times)),  # a line without drives
     }
     compressions = x[:, :-1] - x[:, 1:]
     assert (compressions > 0).any() and (compressions < 0).any()
@@ -234,8 +235,9 @@ def test_read_run_round_trip(run):
     assert (r.end_time, r.terminal, r.message) == (12.5, True, sol.message)
     assert r.diagnostics["steps"] == 1234 and r.diagnostics["max_window"] == 5
     assert set(r.observables) == {"kinetic_energy", "potential_energy", "momentum",
-                                  "dissipated_energy"}
+                                  "dissipated_energy", "drive_work"}
     assert not np.any(r.observables["dissipated_energy"]) and r.dissipated_energy == 0.0
+    assert not np.any(r.observables["drive_work"]) and r.drive_work == 0.0
     np.testing.assert_array_equal(r.contact_dissipation, np.zeros(spec.n - 1))
     np.testing.assert_array_equal(r.wall_impulse, [0.0, 0.0])
 
