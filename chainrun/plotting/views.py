@@ -263,15 +263,20 @@ def _energy(run, figure: Figure, axes) -> None:
     kinetic, stored = obs["kinetic_energy"], obs["potential_energy"] - run.baseline_energy
     dissipated = obs["dissipated_energy"]
     work = obs.get("drive_work", np.zeros_like(kinetic))
+    driven = bool(np.any(work))
+    if driven:  # (a precompressed line stores far more than a drive moves: its change)
+        stored = stored - stored[0]
     total = kinetic + stored + dissipated - work
     label, scaled = axis_label("energy", "energy", run.units,
                                np.concatenate([kinetic, stored, total, work]))
     t = _time_axis(axes, run, run.times)(run.times)
     contacts = "in contacts and walls"
-    if np.any(run.line.position):
+    if np.any(run.line.position) and not driven:
         contacts += " (above the static state)"
     if np.any(run.line.force):
         contacts += ", less the forces' work"
+    if driven:
+        contacts += ", since t = 0"
     axes.plot(t, scaled(kinetic), label="kinetic", gid="kinetic_energy")
     axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
     if np.any(dissipated):
