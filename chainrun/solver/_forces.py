@@ -70,6 +70,9 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
     accelerations.
     """
     nc = m - 1
+    if nc == 0:  # a lone driven ball: no contact (its drive is added after)
+        out[0] = 0.0 if unit else WP[W_ACC, 0]
+        return
     _forces(X, F, MK, WP[W_ALPHA], 0, nc, mode, alpha)
     if unit:
         out[0] = -F[0]
@@ -176,7 +179,9 @@ def _damped_accelerations(X, V, F, MK, WP, DS, wgt, out, m, mode, alpha):
     nc = m - 1
     IM = WP[W_IM]
     GA = WP[W_ACC]
-    if nc <= 0:  # (no cluster: nothing moves under a force)
+    if nc <= 0:  # (no cluster: nothing moves under a force; a lone driven ball: its
+        if nc == 0:  # drive is added after)
+            out[0] = GA[0]
         return
     out[0] = -F[0] * IM[0] + GA[0]
     for p in range(1, nc):
