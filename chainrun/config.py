@@ -21,8 +21,11 @@ The schema (TOML shown; YAML has the same structure)::
     # per contact damping (>= 0) and damping_exponent (>= 0), or restitution (0 < e <= 1)
     # with damping_law ("dashpot" | "kuwabara-kono" | "tsuji") and, where e depends on
     # the impact speed, restitution_speed (> 0)
+    # drive = [{ball = 1, amplitude = 0.1, frequency = 0.2, ramp = 5.0}]: forces in time
     [walls.right]                    # optional, likewise [walls.left]
     stiffness = 1.0                  # alpha, gap; or material (SI); the dissipation keys
+    # motion = {amplitude = 1e-3, frequency = 0.2, ramp = 5.0}: the wall moves; or a
+    # list of such tables (their sum), or {file = "drive.csv"} (times, displacements)
     [output]                         # optional
     times = [0.0, 5.0]               # or {start = 0, stop = 60, step = 5}, stop inclusive;
                                      # none after solver.t_end

@@ -73,8 +73,13 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     stiffness, alpha, gap. units = "si" adds per-ball diameter (m) and material
     (steel, stainless_steel, chrome_steel, brass, aluminium, glass, ptfe,
     tungsten_carbide; or young, poisson, density): masses and Hertz contacts follow,
-    and a wall may have a material. A line with a constant force or two walls needs
-    solver.t_end. Dissipation, per contact: damping (eta) and damping_exponent
+    and a wall may have a material. Driven lines: walls.left.motion = {amplitude,
+    frequency, ramp} moves a wall about its place by A r(t/T) sin(2 pi f t) (a list
+    of tables: their sum; {file = "drive.csv"}: times and displacements, a cubic
+    spline held after the last time), and chain.drive = [{ball, amplitude,
+    frequency, ramp}] (or {ball, file}) puts forces of the same forms on balls. A
+    line with a constant force, a drive or two walls needs solver.t_end.
+    Dissipation, per contact: damping (eta) and damping_exponent
     (beta), F = max(0, k d^alpha + eta d^beta d'), or restitution (0 < e <= 1) with
     damping_law ("dashpot", "kuwabara-kono", "tsuji") and, where e depends on the
     impact speed, restitution_speed; the walls take the same keys. docs/guide.md
