@@ -50,7 +50,8 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
     (``v``, or V0 + h vcoefs @ KV into VS) and, where ``weight`` (a weight of the
     step's quadrature) is not 0, the lanes' dissipated power into DS. On a driven line
     the drives' accelerations at the stage's time t0 + node h are added, and, with a
-    weight, their power (from the driven balls' stage velocities, DVS) to jw.
+    weight, their power (from the driven balls' stage velocities, kept in fs from dvo)
+    to jw.
     """
     if v is None:
         v = "VS"
@@ -69,8 +70,8 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
         drive = [
             "    if driven:",
             "        for d in range(nd):",
-            "            p = DC[d, 1]",
-            f"            DVS[d] = V0[p] + {_combo(vcoefs, 'KV', 'h')}",
+            "            p = S.ints[dco + 2 * d + 1]",
+            f"            S.fs[dvo + d] = V0[p] + {_combo(vcoefs, 'KV', 'h')}",
             f"        jw += _drive_stage(S, KV[{s}], F, t0 + {float(node)!r} * h, {wgt}, True)",
         ]
     else:
@@ -130,8 +131,9 @@ _PROLOGUE = [
     "    F, MK, WP = S.FS, S.TR, S.WP",
     "    VS, DS = S.KV[KV_VS], S.KV[KV_DS]",
     "    driven = S.ints[I_DRIVEN] == 1",
-    "    DC, DVS = S.dcur, S.DVS",
-    "    nd = DC.shape[0]",
+    "    nd = S.ints[I_NDRIVE]",
+    "    dco = S.ints[I_DCUR]",
+    "    dvo = F_NFLOAT + nd",
     "    t0 = S.fs[F_TPREV]",
 ]
 
@@ -354,10 +356,10 @@ _HEADER = [
     ")",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
-    "    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_TOL, F_TPREV, F_WSTEP, HI_ROW, I_DAMPED,",
-    "    I_DRIVEN, I_LWL, I_M, I_MODE, I_RWL, I_UNIT, J_OVER_K, KV_DS, KV_VS, LO_ROW,",
-    "    PAIR_ATOL, PAIR_RTOL, SERIES_SCALE, SERIES_TILE, TILE_STRIDE, W_ACC, W_ALPHA, W_IM,",
-    "    _find_cluster, _tw,",
+    "    EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_NFLOAT, F_TOL, F_TPREV, F_WSTEP, HI_ROW,",
+    "    I_DAMPED, I_DCUR, I_DRIVEN, I_LWL, I_M, I_MODE, I_NDRIVE, I_RWL, I_UNIT, J_OVER_K,",
+    "    KV_DS, KV_VS, LO_ROW, PAIR_ATOL, PAIR_RTOL, SERIES_SCALE, SERIES_TILE, TILE_STRIDE,",
+    "    W_ACC, W_ALPHA, W_IM, _find_cluster, _tw,",
     ")",
 ]
 
@@ -464,7 +466,7 @@ def generate() -> str:
         "    jw = 0.0",
         "    if driven:",
         "        for d in range(nd):",
-        "            DVS[d] = V0[DC[d, 1]]",
+        "            S.fs[dvo + d] = V0[S.ints[dco + 2 * d + 1]]",
         f"        jw = _drive_stage(S, KV[0], F, t0, h * {float(B[0])!r}, False)",
     ]
     for s in range(1, ns):

@@ -180,7 +180,7 @@ class _Prepared:
             found.append((b, _state.DRIVE_FORCE, drive, sc.force * self.mass[b],
                           self.mass[b]))
         self.driven = bool(found)
-        dv = np.zeros((len(found), _state.DV_HI + 1), np.int64)
+        dv = np.zeros((len(found), _state.DV_ROW), np.int64)
         dm = np.zeros(len(found))
         starts, ranges, terms = [], [], []
         for d, (b, kind, drive, scale, extra) in enumerate(found):
@@ -329,8 +329,19 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     bp[_state.B_MASS] = P.mass
     bp[_state.B_IM] = P.im
     bp[_state.B_ACC] = P.acc
-    fs = np.zeros(_state.F_NFLOAT)
-    ints = np.zeros(_state.I_NINT, np.int64)
+    # the drives, past the scalar slots (_state); nothing on a line without drives
+    ndp = P.pc_t.size
+    fs = np.concatenate([np.zeros(_state.F_NFLOAT), P.dm, np.zeros(nd), P.pc_t,
+                         P.dq.reshape(-1), np.zeros((_state.PT + 1) * nd)])
+    dcur = np.stack([P.dv[:, _state.DV_LO], np.full(nd, -1, np.int64)], axis=1)
+    ints = np.concatenate([np.zeros(_state.I_NINT, np.int64), P.dv.reshape(-1),
+                           dcur.reshape(-1), P.pc_q.reshape(-1)]).astype(np.int64)
+    ints[_state.I_NDRIVE] = nd
+    ints[_state.I_DCUR] = _state.I_NINT + _state.DV_ROW * nd
+    ints[_state.I_PCQ] = ints[_state.I_DCUR] + 2 * nd
+    ints[_state.I_PCT] = _state.F_NFLOAT + 2 * nd
+    ints[_state.I_DQ] = ints[_state.I_PCT] + ndp
+    ints[_state.I_DT] = ints[_state.I_DQ] + P.dq.size
     ccap = nb // 2 + 2 + nd
     clo = np.zeros(ccap, np.int64)
     chi = np.zeros(ccap, np.int64)
@@ -375,10 +386,6 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
         ev_k=np.zeros(_EVENT_BUFFER, np.int8),
         ox=np.zeros(nb), ov=np.zeros(nb), probe=np.zeros(0, np.int64),
         freed=freed, jbuf=np.zeros(nb, np.int64),
-        dv=P.dv, dm=P.dm, pc_t=P.pc_t, pc_q=P.pc_q, dq=P.dq,
-        dcur=np.stack([P.dv[:, _state.DV_LO], np.full(nd, -1, np.int64)], axis=1)
-        .astype(np.int64).reshape(nd, 2),
-        DT=np.zeros((nd, _state.PT + 1)), DVS=np.zeros(nd),
         fs=fs, ints=ints,
     )
 

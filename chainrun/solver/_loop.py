@@ -27,7 +27,7 @@ from chainrun.solver._clusters import (
     _activate, _deactivate, _rebuild, _sync, _unseal_at_end, _unseal_near_clusters,
 )
 from chainrun.solver._compression import _pressed_in_step
-from chainrun.solver._drive import _drive_at, _drive_begin, _series_work
+from chainrun.solver._drive import _dm, _drive_at, _drive_begin, _dv, _series_work
 from chainrun.solver._events import (
     _contact_at, _find_event, _load_rate, _log, _rounding,
 )
@@ -41,7 +41,7 @@ from chainrun.solver._state import (
     EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_DISS, F_DOUT, F_FLOOR, F_H, F_HCAP, F_HLAST,
     F_JL, F_JR, F_JSL, F_JSR, F_T, F_TEND, F_TOUT, F_TPREV, F_TSAME, F_TTASK, F_WORK, F_WOUT,
     F_WSTEP, HI_ROW, I_DAMPED, I_DIRTY, I_DRIVEN, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
-    I_HAVEOUT, I_JUMP, I_LWL, I_M, I_MAXEV, I_NCL, I_NEED, I_NEV, I_NSAME, I_NSEAL,
+    I_HAVEOUT, I_JUMP, I_LWL, I_M, I_MAXEV, I_NCL, I_NDRIVE, I_NEED, I_NEV, I_NSAME, I_NSEAL,
     I_PAIRS, I_POST, I_REJ, I_RWL, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS,
     MODE_MIXED, PT, SEALED, SERIES_CLUSTERS,
     ST_DEFECT, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
@@ -161,10 +161,10 @@ def _drive_power(S, th):
     the step's dense output or series), a driven ball's drive times its velocity."""
     t = S.fs[F_TPREV] + th * S.fs[F_HLAST]
     power = 0.0
-    for d in range(S.dv.shape[0]):
+    for d in range(S.ints[I_NDRIVE]):
         u, du, _ddu = _drive_at(S, d, t)
-        b = S.dv[d, DV_BALL]
-        if S.dv[d, DV_KIND] == DRIVE_POSITION:
+        b = _dv(S, d, DV_BALL)
+        if _dv(S, d, DV_KIND) == DRIVE_POSITION:
             left = b == 0
             lane = S.ints[I_LWL] if left else S.ints[I_RWL]
             if lane < 0:
@@ -177,7 +177,7 @@ def _drive_power(S, th):
                     f + S.cp[C_ETA, j] * _damping(c, w, S.cp[C_BETA, j])
             power += f * du if left else -f * du
         else:
-            power += S.dm[d] * u * _ball_at(S, b, th)[1]
+            power += _dm(S, d) * u * _ball_at(S, b, th)[1]
     return power
 
 

@@ -131,7 +131,8 @@ F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
-    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_DRIVEN, I_NINT = range(36)
+    I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_DRIVEN, I_NDRIVE, I_DCUR, I_PCQ, I_PCT, \
+    I_DQ, I_DT, I_NINT = range(42)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
@@ -155,8 +156,21 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # the ends of the few balls the event scan reads come from their series then
 
 # ---- the drives (_drive) -------------------------------------------------------------
-# rows of dv: the internal ball, the kind, the first and one past the last piece
+# A driven line keeps its drives past the scalar slots, in ints and fs, so that the
+# State of a line without drives is no larger than it was (kernels that are not inlined
+# take the State whole, and a field more costs every such call). ints[I_NDRIVE] = D
+# drives; in ints, from I_NINT, each drive's row of DV_* (DV_ROW each); from
+# ints[I_DCUR], each drive's piece in force and its ball's compact index (2 each);
+# from ints[I_PCQ], each piece's first and one past its last term (2 each). In fs,
+# from F_NFLOAT, each drive's DM (the mass it drives, or a moving wall's place), then
+# each drive's stage velocity; from ints[I_PCT], each piece's start; from ints[I_DQ],
+# the terms (drive.TERM each: the polynomial's coefficients, omega, phi); from
+# ints[I_DT], each drive's terms of the positions' series at a series step's start
+# (PT + 1 each).
+# the fields of a drive's row: the internal ball, the kind, the first and one past the
+# last piece
 DV_BALL, DV_KIND, DV_LO, DV_HI = range(4)
+DV_ROW = 4
 # a kind: the ball's position is u(t) (a moving wall), or its acceleration gains u(t)
 # (a force prescribed in time, over the ball's mass)
 DRIVE_POSITION = 0
@@ -235,13 +249,6 @@ State = namedtuple(
         "ox", "ov", "probe",
         # scratch lists of ball / contact indices, shape (N,)
         "freed", "jbuf",
-        # the drives (see _drive; every array empty on a line without one): per drive
-        # its ball, kind, first and last piece (dv, rows DV_*) and the mass it drives
-        # (dm); per piece its start (pc_t) and its terms' range (pc_q); the terms (dq,
-        # rows of drive.TERM); per drive the piece in force and its ball's compact
-        # index (dcur), and the terms it adds to the positions' series at the step's
-        # start (DT, shape (PT + 1, D)), its stage velocity (DVS)
-        "dv", "dm", "pc_t", "pc_q", "dq", "dcur", "DT", "DVS",
         # scalars
         "fs", "ints",
     ],

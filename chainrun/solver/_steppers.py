@@ -32,8 +32,8 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
-    F_TPREV, I_DAMPED, I_DENSE, I_DRIVEN, I_DSTAMP, I_LWL, I_M, I_MODE, I_RWL, I_TAY, I_UNIT,
-    I_XEND,
+    F_TPREV, I_DAMPED, I_DCUR, I_DENSE, I_DRIVEN, I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE,
+    I_RWL, I_TAY, I_UNIT, I_XEND,
     MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
     _tw,
 )
@@ -93,11 +93,14 @@ def _taylor(S):
         fl = W[_tw(p - 1, f0)] if p > 0 else 0.0
         fr = W[_tw(p, f0)] if p < nc else 0.0
         TX[2, p] = 0.5 * (fl - fr) if unit else 0.5 * ((fl - fr) * IM[p] + GA[p])
-    DT, DC = S.DT, S.dcur
-    if S.ints[I_DRIVEN] == 1:
+    # the drives' series (PT + 1 terms a drive) and places, empty on a line without
+    nd = S.ints[I_NDRIVE]
+    DT = S.fs[S.ints[I_DT]:S.ints[I_DT] + (PT + 1) * nd]
+    DC = S.ints[S.ints[I_DCUR]:S.ints[I_DCUR] + 2 * nd]
+    if nd > 0:
         _drive_series(S, S.fs[F_T])
-        for d in range(DT.shape[0]):
-            TX[2, DC[d, 1]] += DT[d, 2]
+        for d in range(nd):
+            TX[2, DC[2 * d + 1]] += DT[(PT + 1) * d + 2]
     if mode == MODE_LINEAR:
         _linear_orders(TX, W, S.XS, MK, IM, nc, unit, DT, DC)
     elif mode == MODE_MIXED:

@@ -31,8 +31,10 @@ def test_linear_orders_are_the_recurrence(m, unit, driven):
     W = np.zeros(_state.TILE_STRIDE * (cap // tile + 1))
     G = np.zeros(cap)
     nd = 1 if driven else 0
-    DT = rng.normal(size=(nd, pt + 1))
-    DC = np.array([[0, m // 2]] * nd, dtype=np.int64).reshape(nd, 2)
+    # the drives as the kernels keep them (_state): PT + 1 terms a drive, and a drive's
+    # piece and its ball's compact index
+    DT = rng.normal(size=nd * (pt + 1))
+    DC = np.array([0, m // 2] * nd, dtype=np.int64)
     twin(_generated._linear_orders)(TX, W, G, MK, IM, nc, unit, DT, DC)
 
     T = np.zeros((pt + 1, m))
@@ -48,6 +50,6 @@ def test_linear_orders_are_the_recurrence(m, unit, driven):
             s = 1.0 / ((k + 1) * (k + 2))
             T[k + 2] = net * s if unit else net * s * IM[:m]
             if driven:
-                T[k + 2, m // 2] += DT[0, k + 2]
+                T[k + 2, m // 2] += DT[k + 2]
     np.testing.assert_array_equal(TX[:, :m], T)
     np.testing.assert_array_equal(G[:nc], c * MK[:nc])
