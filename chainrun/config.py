@@ -1066,6 +1066,9 @@ def build_line(chain: Chain, walls: "Walls", units: str) -> Line:
         spec = getattr(walls, side)
         if spec.motion is not None:
             built[side] = replace(wall, motion=spec.motion.drive)
+    if chain.drive is not None and n == 1 and walls.left is None and walls.right is None:
+        problems.append(_Problem("chain.drive", "a lone ball without walls touches nothing: "
+                                 "its drive alone moves it, with nothing to solve"))
     if chain.drive is not None:
         drives = []
         for i, spec in enumerate(chain.drive):

@@ -481,6 +481,9 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
     if t_end is None and not line.has_terminal_state:
         raise ValueError("this line has no terminal state (an external force or a drive "
                          "keeps doing work, or walls hold it at both ends): give t_end")
+    if line.n == 1 and line.left is None and line.right is None and line.drives:
+        raise ValueError("a lone ball without walls touches nothing: its drive alone moves "
+                         "it, with nothing to solve")
     sensor_balls, sensor_dt, sensor_end = _check_sensors(sensors, sensor_dt, sensor_end,
                                                          line.n)
     P = _Prepared(line)

@@ -155,3 +155,12 @@ def test_a_driven_run_file_keeps_its_drives_and_their_work(tmp_path):
     assert np.abs(energy - energy[0] - o["drive_work"]).max() < 1e-10 * scale
     ds = chainrun.open_run(out / "run.h5")
     assert ds.drive_work.attrs["units"] and ds.attrs["final_drive_work"] == run.drive_work
+
+
+def test_a_lone_driven_ball_without_walls_is_refused():
+    text = ('name = "lone"\n[chain]\nn = 1\nk = 0\nalpha = 1.5\n'
+            'drive = {ball = 1, amplitude = 0.1, frequency = 1.0}\n[solver]\nt_end = 5.0\n')
+    with pytest.raises(ConfigError) as info:
+        parse_experiment(text, "toml").runs()
+    assert any(p.startswith("chain.drive: a lone ball without walls touches nothing")
+               for p in info.value.problems), info.value.problems
