@@ -43,7 +43,11 @@ COMPILE_ESTIMATE_S = 75
 _NOTICE_AFTER_S = 2.0
 _PROGRESS_EVERY_S = 10.0
 
-_OPTIONS = dict(_nrt=False)
+# error_model "numpy": a float divided by zero is an IEEE infinity (or NaN), as numpy
+# gives it, not a ZeroDivisionError out of the kernel; a product that underflows to 0
+# (half of a subnormal relative acceleration) then divides into the limit the formula
+# means, and the non-finite checks of the steps catch what is no number at all
+_OPTIONS = dict(_nrt=False, error_model="numpy")
 kernel = functools.partial(nb.njit, no_cpython_wrapper=True, no_cfunc_wrapper=True,
                            **_OPTIONS)
 

@@ -353,8 +353,12 @@ class Line:
                 f = max(f, k0 * overlap ** a0)
             if f == 0.0:
                 return Scales(mass, 1.0, 1.0)
-            length = (f / k0) ** (1.0 / a0)
-            speed = math.sqrt(length * f / mass)
+            # in logarithms: a force as small as a float can be (a subnormal) still
+            # gives a positive length and speed, where (F/K)^(1/a) would underflow to 0
+            log_length = (math.log(f) - math.log(k0)) / a0
+            log_speed = 0.5 * (log_length + math.log(f) - math.log(mass))
+            log_time = (math.log(mass) + (1.0 - a0) * log_speed - math.log(k0)) / (a0 + 1.0)
+            return Scales(mass, math.exp(log_speed + log_time), math.exp(log_time))
         time = (mass * speed ** (1.0 - a0) / k0) ** (1.0 / (a0 + 1.0))
         return Scales(mass, speed * time, time)
 
