@@ -28,8 +28,8 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     ACTIVE, C_ALPHA, C_BETA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, C_LOC, DORMANT, EPS,
     EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR,
-    F_HLAST, HI_ROW, I_DAMPED, I_EVTOTAL, I_M, I_NCL, I_NEV, I_TAY, LO_ROW, N_SAMPLES,
-    N_SERIES_SAMPLES, OPEN, _tw,
+    F_HLAST, HI_ROW, I_DAMPED, I_EVTOTAL, I_M, I_MODE, I_NCL, I_NEV, I_TAY, LO_ROW,
+    MODE_LINEAR, MODE_MIXED, N_SAMPLES, N_SERIES_SAMPLES, OPEN, PT, W_ALPHA, _tw,
 )
 from chainrun.solver._steppers import _ball_at, _ball_end
 
@@ -396,3 +396,31 @@ def _find_event(S):
                         bk = kind
                         blev = 0.0
     return best, bj, bk, blev
+
+
+@kernel
+def _grazes(S, h):
+    """Whether a contact of the window passes a minimum of its compression inside the
+    series step [0, h] (its rate below 0 at the start, above 0 at the end) and comes
+    below half its start there (``_series_bounds``' lower bound, after ``_find_event``).
+
+    Near such a graze c(t)^alpha has branch points close to the real axis, at the
+    complex times where c vanishes; they bound the series' radius of convergence, and
+    from a start far from them the last terms do not show it yet, so the truncation
+    estimate passes a step that crosses them. A linear contact has none.
+    """
+    mode = S.ints[I_MODE]
+    if mode == MODE_LINEAR:
+        return False
+    W, MK = S.TW, S.TR
+    for p in range(S.ints[I_M] - 1):
+        if MK[p] == 0.0 or (mode == MODE_MIXED and S.WP[W_ALPHA, p] == 1.0):
+            continue
+        if not (W[_tw(p, LO_ROW)] < 0.5 * W[_tw(p, 0)] and W[_tw(p, 1)] < 0.0):
+            continue
+        rate = PT * W[_tw(p, PT)]
+        for k in range(PT - 1, 0, -1):
+            rate = rate * h + k * W[_tw(p, k)]
+        if rate > 0.0:
+            return True
+    return False

@@ -29,7 +29,7 @@ from chainrun.solver._clusters import (
 from chainrun.solver._compression import _pressed_in_step
 from chainrun.solver._drive import _dm, _drive_at, _drive_begin, _dv, _series_work
 from chainrun.solver._events import (
-    _contact_at, _find_event, _load_rate, _log, _rounding,
+    _contact_at, _find_event, _grazes, _load_rate, _log, _rounding,
 )
 from chainrun.solver._forces import _damping, _force, _stored
 from chainrun.solver._heap import _heap_pop, _heap_valid_top
@@ -625,6 +625,14 @@ def advance(S):
                 err = _taylor_error(S, h)
                 S.ints[I_XEND] = 0
                 th, j, kind, lev = _find_event(S)
+                if j < 0 and _grazes(S, h):
+                    # past a graze the series is not to be trusted (_grazes): halve
+                    # until the step ends before the compression's minimum or keeps
+                    # it above half its start
+                    h *= 0.5
+                    S.ints[I_REJ] += 1
+                    clipped = False
+                    continue
                 if j < 0:
                     err = _step(S, h)
             else:
