@@ -11,11 +11,12 @@ and ``cli`` (the ``chainrun`` command); ``api`` is the same from Python::
     ds = chainrun.open_sweep("results/disorder")  # every run, along a dimension "run"
     p = chainrun.pulses("results/solitary/run.h5")  # force sensors: pulses, wave speed
     ds = chainrun.spectrum("crystal.toml")     # the line's linear spectrum at rest
+    t = chainrun.transmission("results/driven-dimer")  # a driven sweep's transmission
 """
 
 __version__ = "0.1.0"
 
-__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
 
 def __getattr__(name):

@@ -32,7 +32,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum"]
+__all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
 
@@ -69,6 +69,14 @@ _WALL_VARS = {
     "wall_impulse": ("impulse the wall gave the line by the end (+ towards ball N)",
                      "momentum"),
     "wall_dissipation": ("energy the wall's contact dissipated by the end", "energy"),
+}
+#: A moving wall's motion, one sine of ``walls.<side>.motion`` each (dims wall, sine):
+#: NaN where the wall does not move, or moves by a file's samples.
+_MOTION_VARS = {
+    "wall_motion_amplitude": ("amplitude A of the sine A r(t/T) sin(2 pi f t) the wall "
+                              "moves by (+ towards ball N)", "position"),
+    "wall_motion_frequency": ("frequency f of the wall's sine", "frequency"),
+    "wall_motion_ramp": ("duration T of the sine's smooth start (0: none)", "time"),
 }
 _EVENT_VARS = {
     "event_time": ("time of the contact event", "time"),
@@ -148,6 +156,16 @@ def _variables(run) -> tuple[dict, dict]:
                 "ball", np.asarray(getattr(run.check, f"{name}_velocity_spread")),
                 {"long_name": f"|difference| of the {what} between the run and its check "
                               f"at rtol {run.check.rtol:g} (chainrun.check)"}, "velocity")
+    motions = [None if w is None or w.motion is None else w.motion for w in walls]
+    if any(m is not None for m in motions):
+        sines = max(len(m.sines) for m in motions if m is not None) or 1
+        table = np.full((3, 2, sines), np.nan)
+        for side, motion in enumerate(motions):
+            for i, sine in enumerate(motion.sines if motion is not None else ()):
+                table[:, side, i] = sine.amplitude, sine.frequency, sine.ramp
+        coords["sine"] = ("sine", np.arange(1, sines + 1))
+        for row, (name, (text, quantity)) in enumerate(_MOTION_VARS.items()):
+            data[name] = (("wall", "sine"), table[row], {"long_name": text}, quantity)
     if run.sensor_balls.size:
         coords |= {"sample": ("sample", run.sensor_time), "sensor": ("sensor", run.sensor_balls),
                    "side": ("side", ["towards ball 1", "away from ball 1"])}
@@ -184,7 +202,10 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     ``damping``, ``damping_exponent`` (contact); the walls'
     ``wall_stiffness``, ``wall_alpha``, ``wall_gap``, ``wall_damping``,
     ``wall_damping_exponent`` (NaN where there is no wall) and what they did,
-    ``wall_impulse`` and ``wall_dissipation`` (wall); the results: ``final_position``,
+    ``wall_impulse`` and ``wall_dissipation`` (wall); where a wall moves by sines
+    (``walls.<side>.motion``), ``wall_motion_amplitude``, ``wall_motion_frequency``
+    and ``wall_motion_ramp`` (wall, sine: one entry per sine, NaN where there is none);
+    the results: ``final_position``,
     ``final_velocity``, ``separation_time``, ``separation_velocity`` (ball),
     ``contact_dissipation`` (contact); for a checked run (``--check``),
     ``final_velocity_spread`` and ``separation_velocity_spread`` (ball), the attribute
@@ -247,9 +268,10 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     logs, of different lengths, are kept whole: run r's events are
     ``ds.event_time.isel(run=r)[: ds.event_count.isel(run=r)]``, the rest filled with
     NaN (times), -1 (contacts) and 0 (kinds). Each run's outcome, ``end_time``,
-    ``terminal``, ``message``, ``config_hash``, ``n``, ``k``, ``alpha`` and
-    diagnostics (``diagnostics_*``) are variables along ``run``; the attributes are
-    those every run shares.
+    ``terminal``, ``message``, ``config_hash``, ``n``, ``k`` and diagnostics
+    (``diagnostics_*``) are variables along ``run`` (``alpha`` and
+    ``dissipated_energy`` stay the runs' variables of those names, per contact and
+    over time); the attributes are those every run shares.
 
     Raises
     ------
@@ -276,7 +298,10 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     per_run = [key for key in runs[0].attrs
                if key in _PER_RUN or key.startswith("diagnostics_")]
     counts = [ds.sizes["event"] for ds in runs]
-    runs = [ds.assign({key: ds.attrs[key] for key in per_run}) for ds in runs]
+    # a variable of the same name (alpha per contact, dissipated_energy over time)
+    # already holds that number along run, in more detail: it is kept
+    runs = [ds.assign({key: ds.attrs[key] for key in per_run if key not in ds.data_vars})
+            for ds in runs]
     out = xr.concat(runs, dim="run", join="outer", fill_value={**_EVENT_FILL},
                     combine_attrs="drop_conflicts", coords="minimal", compat="override")
     for key in per_run:
@@ -462,6 +487,76 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
                                          "fit's residuals (NaN with two sensors)"})
     return xr.Dataset(data, coords={"sensor": ("sensor", p.balls)},
                       attrs={"units": "SI" if si else _UNITS, "arrival_fraction": p.arrival})
+
+
+# ------------------------------------------------------------------------ transmission
+def transmission(run, *, harmonics: int = 3, start: float | None = None,
+                 periods: int | None = None) -> "xarray.Dataset":  # noqa: F821
+    """The steady response of a driven run's force sensors: amplitude and phase at the
+    drive's frequency and its harmonics, and the transmission; over a sweep of the
+    drive's frequency, a transmission curve.
+
+    ``chainrun.analysis.transmission`` measures them; its module's docstring defines
+    each number. One wall of the run moves by one sine (``walls.<side>.motion``), and
+    the run has force sensors (``output.sensors``).
+
+    Parameters
+    ----------
+    run : xarray.Dataset or path
+        A run (``open_run``, ``simulate``) or a sweep (``open_sweep``), or the path of
+        a run file or of an output folder (its ``index.h5``: the sweep).
+    harmonics : int
+        Fit the drive's frequency f and its multiples up to ``harmonics`` f.
+    start : float, optional
+        The fit's window, a whole number of drive periods ending at the last sensor
+        sample, begins at or after this time; by default half-way between the end of
+        the drive's ramp and the last sample.
+    periods : int, optional
+        Fit this many periods at the end of the record instead.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``amplitude``, ``phase`` and ``transmission`` (sensor, harmonic: the amplitude
+        over ``reference_force``, the drive's amplitude times the linear stiffness of
+        the driven wall's contact), ``mean_force`` and ``residual`` (sensor),
+        ``periods`` fitted and the window; for a sweep each has a dimension
+        ``frequency`` first (ascending; ``run`` along it names the runs). The line's
+        linear spectrum in the drive's frequency unit (Hz in SI): ``mode_frequency``
+        (mode), and for a periodic line ``band_bottom`` and ``band_top`` (branch).
+
+    Raises
+    ------
+    chainrun.errors.ChainrunError
+        For a run without sensors or without one wall moving by one sine, a window
+        without one whole period, too few samples per period for the harmonics, or a
+        sweep whose runs share a frequency or differ in their lines (one line naming
+        the run); ``chainrun.errors.StoreError`` for a file or folder that cannot be
+        read.
+
+    Examples
+    --------
+    >>> t = chainrun.transmission("results/driven-dimer")         # doctest: +SKIP
+    >>> t.transmission.sel(harmonic=1, sensor=20).values          # doctest: +SKIP
+    array([8.19e-01, 1.48e-04])
+    """
+    import xarray as xr
+
+    from chainrun.analysis.transmission import measure, measure_sweep
+    from chainrun.errors import StoreError
+
+    from chainrun.store import read_index, read_run
+
+    options = dict(harmonics=harmonics, start=start, periods=periods)
+    if isinstance(run, xr.Dataset):
+        return measure_sweep(run, **options) if "run" in run.dims else measure(run, **options)
+    folder = Path(run)
+    if not folder.is_dir():
+        return measure(read_run(folder), **options)
+    if not (folder / "index.h5").is_file():
+        raise StoreError(f"{folder}: no index.h5 (not a chainrun output folder)")
+    return measure_sweep([read_run(folder / str(row["file"]))
+                          for row in read_index(folder / "index.h5")], **options)
 
 
 def spectrum(config=None, /, *, period: int | None = None,
