@@ -20,6 +20,20 @@ def _ensemble(folder: Path):
     return ensemble(runs) if is_ensemble(runs) else None
 
 
+def _transmission(folder: Path):
+    """The transmission curve of the runs in ``folder`` if they sweep a wall's drive
+    frequency and have force sensors, else None."""
+    from chainrun.analysis.transmission import measure_sweep
+    from chainrun.store import read_index, read_run
+
+    runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    swept = any(key.startswith("walls.") and key.endswith(".motion.frequency")
+                for run in runs for key in run.parameters.get("overrides", {}))
+    if not swept or not all(run.sensor_balls.size for run in runs):
+        return None
+    return measure_sweep(runs)
+
+
 @click.command()
 @click.argument("names", nargs=-1)
 @click.option("--all", "all_", is_flag=True,
@@ -59,7 +73,9 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     velocities, the energy over time and the force sensors' traces, each as PNG and
     PDF (--what picks them); an output folder of a sweep also gets its final
     velocities against each swept key (sweep-final.png, --balls picks the balls) and
-    a panel per run (sweep-runs.png).
+    a panel per run (sweep-runs.png); a sweep of a wall's drive frequency with force
+    sensors also gets its transmission curve against the line's bands
+    (transmission.png, `chainrun.transmission`).
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -71,6 +87,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     Examples:
       chainrun plot results/cradle/run.h5            # -> results/cradle/figures/
       chainrun plot results/table1 --what final --log --balls 1,2,-1
+      chainrun plot results/driven-dimer             # + transmission.png
       chainrun plot --list
       chainrun plot fig05
       chainrun plot --all
@@ -116,7 +133,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
                 if folder.is_dir() and len(files) > 1 and (folder / "index.h5").is_file():
                     paths = render_sweep(folder, numbers, out=out, log=log,
-                                         ensemble=_ensemble(folder))
+                                         ensemble=_ensemble(folder),
+                                         transmission=_transmission(folder))
                     click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
             except ChainrunError as exc:
                 fail(str(exc))

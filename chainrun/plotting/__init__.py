@@ -160,14 +160,22 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
 
 
 def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
-                 ensemble=None) -> list[Path]:
+                 ensemble=None, transmission=None) -> list[Path]:
     """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
     ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
     final velocities of ``balls`` against each swept key (``sweep-final``); or, given
     the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
     differ only in their random seeds), its mean and spread (``ensemble``) instead of
-    the latter. Returns the files written."""
-    from chainrun.plotting.views import draw_ensemble, draw_sweep, draw_sweep_runs
+    the latter. Given the transmission curve of a sweep over a drive's frequency
+    (``chainrun.transmission``), also that curve against the line's bands
+    (``transmission``). Returns the files written."""
+    from chainrun.plotting.transmission import draw_transmission
+    from chainrun.plotting.views import (
+        describe,
+        draw_ensemble,
+        draw_sweep,
+        draw_sweep_runs,
+    )
     from chainrun.store import read_index, read_run
 
     folder = Path(folder)
@@ -178,7 +186,13 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
     with style(colour=True):
         first = (("ensemble", draw_ensemble(ensemble, runs[0])) if ensemble is not None
                  else ("sweep-final", draw_sweep(runs, balls)))
-        for name, figure in (first, ("sweep-runs", draw_sweep_runs(runs, log=log))):
+        figures = [first, ("sweep-runs", draw_sweep_runs(runs, log=log))]
+        if transmission is not None:
+            keys = runs[0].parameters.get("overrides", {})
+            title = "\n".join([runs[0].parameters.get("experiment", ""),
+                               describe(runs[0], keys, width=90)])
+            figures.append(("transmission", draw_transmission(transmission, title)))
+        for name, figure in figures:
             outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]
             _save(figure, outputs)
             written += outputs
