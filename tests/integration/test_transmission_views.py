@@ -1,0 +1,103 @@
+"""A driven sweep's transmission from Python and from ``chainrun plot OUTDIR``: the same
+numbers from a folder, its Dataset and its runs; the curve drawn is the one measured;
+runs it cannot be measured on are refused in one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from helpers import simulate_text
+
+import chainrun
+from chainrun.cli import main
+from chainrun.errors import ChainrunError
+from chainrun.plotting import style
+from chainrun.plotting.transmission import draw_transmission
+
+SWEEP = """name = "shaken"
+[chain]
+n = 10
+k = 0
+alpha = 1.5
+precompression = 1.0
+[walls.left]
+motion = {amplitude = 1.0e-6, frequency = 0.2, ramp = 30.0}
+[walls.right]
+[output]
+sensors = [1, 10]
+sensor_dt = 0.05
+[solver]
+t_end = 120.0
+[sweep]
+"walls.left.motion.frequency" = [0.45, 0.2, 0.3]
+"""
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    return simulate_text(tmp_path_factory.mktemp("transmission"), SWEEP)
+
+
+def test_a_folder_its_dataset_and_a_run_give_the_same_transmission(sweep):
+    curve = chainrun.transmission(sweep)
+    assert curve.frequency.values.tolist() == [0.2, 0.3, 0.45]        # sorted
+    assert curve.run.values.tolist() == [f"left_motion_frequency={f}" for f in (0.2, 0.3, 0.45)]
+    assert curve.transmission.dims == ("frequency", "sensor", "harmonic")
+    same = chainrun.transmission(chainrun.open_sweep(sweep))
+    np.testing.assert_array_equal(same.transmission.values, curve.transmission.values)
+    one = chainrun.transmission(sweep / "left_motion_frequency=0.3.h5")
+    np.testing.assert_array_equal(one.amplitude.values,
+                                  curve.amplitude.sel(frequency=0.3).values)
+    assert one.transmission.attrs["units"] == "1" and one.amplitude.attrs["units"] == "paper units"
+    # the default window: the second half of the time after the ramp, whole periods
+    last = float(chainrun.open_run(sweep / "left_motion_frequency=0.3.h5").sample[-1])
+    assert int(one.periods) == 13 and float(one.window_end) == last
+    assert float(one.window_start) == pytest.approx(last - 13 / 0.3)
+    # 0.45 lies above the cut-off 2 sqrt(1.5) / (2 pi) = 0.39: the far end gets little
+    far = curve.transmission.sel(sensor=10, harmonic=1)
+    assert far.sel(frequency=0.45) < 1e-3 * far.sel(frequency=0.2)
+
+
+def test_the_figure_draws_the_measured_curve_and_the_bands(sweep):
+    curve = chainrun.transmission(sweep)
+    with style(colour=True):
+        figure = draw_transmission(curve, "shaken")
+    axes = figure.axes[0]
+    drawn = {a.get_gid(): a for a in axes.get_children() if a.get_gid()}
+    for ball in (1, 10):
+        x, y = drawn[f"transmission/{ball}"].get_data()
+        np.testing.assert_array_equal(x, curve.frequency.values)
+        np.testing.assert_array_equal(y, curve.transmission.sel(sensor=ball, harmonic=1))
+    assert axes.get_yscale() == "log" and "stop/1" in drawn and "band_edge" in drawn
+
+
+@pytest.mark.slow
+def test_chainrun_plot_draws_a_frequency_sweeps_transmission(sweep, tmp_path):
+    result = CliRunner().invoke(main, ["plot", str(sweep), "--what", "sensors",
+                                       "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "transmission.png").stat().st_size > 0
+    assert (tmp_path / "transmission.pdf").stat().st_size > 0
+
+
+def test_runs_without_a_sine_or_sensors_are_refused_in_one_line(tmp_path):
+    still = chainrun.simulate(chain={"n": 4, "k": 0, "alpha": 1.5, "precompression": 1.0},
+                              walls={"left": {}, "right": {}}, solver={"t_end": 5.0},
+                              output={"sensors": [2], "sensor_dt": 0.1})
+    with pytest.raises(ChainrunError, match="no wall moves by a sine"):
+        chainrun.transmission(still)
+    blind = chainrun.simulate(chain={"n": 4, "k": 0, "alpha": 1.5, "precompression": 1.0},
+                              walls={"left": {"motion": {"amplitude": 1e-6, "frequency": 0.3}},
+                                     "right": {}}, solver={"t_end": 5.0})
+    with pytest.raises(ChainrunError, match="no force sensors"):
+        chainrun.transmission(blind)
+    short = chainrun.simulate(chain={"n": 4, "k": 0, "alpha": 1.5, "precompression": 1.0},
+                              walls={"left": {"motion": {"amplitude": 1e-6, "frequency": 0.3,
+                                                         "ramp": 4.0}}, "right": {}},
+                              solver={"t_end": 5.0}, output={"sensors": [2], "sensor_dt": 0.1})
+    with pytest.raises(ChainrunError, match="not one whole period"):
+        chainrun.transmission(short)
+    with pytest.raises(ChainrunError, match="Nyquist"):
+        chainrun.transmission(short, harmonics=20, start=0.0)
