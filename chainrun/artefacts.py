@@ -184,6 +184,9 @@ GALLERY: tuple[Artefact, ...] = (
              "forward and backward", tuple(f"taper-{q}" for q in _TAPERS)),
     _gallery("dimer", "Dimer chains: the mass ratios at which a solitary wave travels "
              "without radiating", tuple(f"dimer-{r}" for r in _DIMER_RATIOS)),
+    _gallery("transmission", "A driven granular crystal of steel and aluminium beads: "
+             "transmission against the drive's frequency, its band gap against the linear "
+             "bands", ("transmission-dimer",)),
 )
 
 #: The gallery's comparison of published numbers with chainrun's, after every item.
@@ -280,7 +283,8 @@ def make_rules(results: str = "results", configs: str = "configs") -> str:
         if a.kind == "comparison":   # its catalogue quotes every recipe's values
             needs.append("$(wildcard chainrun/analysis/*.py)")
         elif a in GALLERY:           # the gallery's measurements and theory
-            needs += ["chainrun/analysis/gallery_measure.py", "chainrun/analysis/pulse.py"]
+            needs += ["chainrun/analysis/gallery_measure.py", "chainrun/analysis/pulse.py",
+                      "chainrun/analysis/transmission.py"]
         lines.append(f"{analysis_path(a.name, results)}: {' '.join(needs)}")
     lines.append("")
     for a in ALL:

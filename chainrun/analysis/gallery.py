@@ -9,7 +9,8 @@ pulses, ``chainrun.analysis.pulse``.
 Items: ``solitary`` (Coste et al. 1997; Nesterenko's laws), ``cradle`` (Newton's cradle
 in SI, elastic and damped), ``wall`` (Falcon et al. 1998; N = 2K on a wall; elastic and
 damped), ``head_on`` (a line struck at
-both ends; an impurity), ``taper`` (tapered chains), ``dimer`` (dimer chains).
+both ends; an impurity), ``taper`` (tapered chains), ``dimer`` (dimer chains),
+``transmission`` (a driven dimer chain's transmission, ``chainrun.analysis.transmission``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from chainrun.analysis import gallery_measure as gm
 from chainrun.analysis.pulse import first_pulse, wave_speed
 from chainrun.materials import material
 
-__all__ = ["cradle", "dimer", "head_on", "solitary", "taper", "wall"]
+__all__ = ["cradle", "dimer", "head_on", "solitary", "taper", "transmission", "wall"]
 
 
 def _swept(run, key: str):
@@ -453,4 +454,85 @@ def dimer(inputs: Inputs) -> Result:
                 "three grid points around it)")
         r.value(f"antiresonance_{j}_left", left[i], "energy share left at that grid point")
     r.value("minima", len(minima), "local minima in the scanned ratios")
+    return r
+
+
+# ----------------------------------------------------------------------- transmission
+#: A sweep point is stopped when the last bead's amplitude is under this fraction of the
+#: first bead's (-20 dB).
+STOPPED = 0.1
+
+
+def transmission(inputs: Inputs) -> Result:
+    """A driven dimer chain: the transmission curve of its frequency sweep, the line's
+    modes and bands, and its stop bands as the sweep sees them against the closed forms
+    of the infinite dimer chain's band edges."""
+    from chainrun.analysis.transmission import measure_sweep
+
+    r = Result()
+    runs = inputs.runs("gallery/transmission-dimer")
+    t = measure_sweep(runs)
+    f = t["frequency"].values
+    first, last = int(t["sensor"].values[0]), int(t["sensor"].values[-1])
+    curve = t["transmission"].sel(harmonic=1).transpose("frequency", "sensor").values
+    for name, value in (("frequency", f), ("sensor", t["sensor"].values),
+                        ("transmission", curve), ("periods", t["periods"].values),
+                        ("mode_frequency", t["mode_frequency"].values),
+                        ("band_bottom", t["band_bottom"].values),
+                        ("band_top", t["band_top"].values)):
+        r.array(f"curve/{name}", value)
+    r.setting("description", runs[0].parameters["config_resolved"].get("description", ""))
+    r.setting("measure", f"least squares at the drive's frequency over whole periods at the "
+                         f"end of each run (chainrun.analysis.transmission); stopped: ball "
+                         f"{last}'s amplitude under {STOPPED:g} of ball {first}'s")
+    # the infinite dimer chain's band edges in closed form: every contact between two
+    # beads has K = (3/2) kappa^(2/3) F0^(1/3) at rest, the masses m1 > m2 alternate
+    line = runs[0].line
+    m1, m2 = sorted(line.mass[:2], reverse=True)
+    f0 = float(runs[0].parameters["config_resolved"]["chain"]["precompression"])
+    k = 1.5 * float(line.stiffness[0]) ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)
+    edges = np.sqrt([2 * k / m1, 2 * k / m2, 2 * k * (1 / m1 + 1 / m2)]) / (2 * np.pi)
+    for name, value, what in zip(("acoustic_top", "optical_bottom", "optical_top"), edges,
+                                 ("top of the acoustic band", "bottom of the optical band",
+                                  "top of the optical band")):
+        r.value(f"{name}_khz", value / 1e3, f"{what}, sqrt(2K/m) closed form (kHz)")
+    for name, value in (("acoustic_top", t["band_top"].values[0]),
+                        ("optical_bottom", t["band_bottom"].values[1]),
+                        ("optical_top", t["band_top"].values[1])):
+        r.value(f"spectrum_{name}_khz", value / 1e3, "the same edge from chainrun's linear "
+                                                     "spectrum of the line (kHz)")
+    step = float(np.min(np.diff(f)))
+    r.value("step_khz", step / 1e3, "the sweep's step (kHz)")
+    r.value("K", k, "linear stiffness of a contact between two beads at rest (N/m)")
+    near, far = curve[:, 0], curve[:, -1]
+    stopped = far < STOPPED * near
+    gap = np.flatnonzero(stopped & (f > edges[0] - 2 * step) & (f < edges[1] + 2 * step))
+    above = np.flatnonzero(stopped & (f > edges[1] + 2 * step))
+    if gap.size == 0 or above.size == 0:
+        raise ValueError("gallery-transmission: the sweep found no stop band at the gap or "
+                         "above the top band")
+    r.value("gap_low_khz", f[gap[0]] / 1e3, "the lowest frequency the chain stops at, about "
+                                            "the gap (kHz)")
+    r.value("gap_high_khz", f[gap[-1]] / 1e3, "the highest frequency the chain stops at, "
+                                              "about the gap (kHz)")
+    r.value("top_khz", f[above[0]] / 1e3, "the lowest frequency above the optical band the "
+                                          "chain stops at (kHz)")
+    inside = (f > edges[0] + step) & (f < edges[1] - step)
+    acoustic = f < edges[0]
+    r.value("drop", np.median(far[inside]) / np.median(far[acoustic]),
+            f"median transmission to ball {last} inside the gap over that in the acoustic band")
+    r.value("gap_min", far[inside].min(), f"the least transmission to ball {last} in the gap")
+    r.value("acoustic_median", np.median(far[acoustic]),
+            f"median transmission to ball {last} in the acoustic band")
+    # the evanescent decay per cell at mid-gap: cos q = 1 - (2K(m1+m2) w^2 - m1 m2 w^4) /
+    # (2 K^2) < -1 in the gap, q = pi + i mu
+    w = np.pi * (edges[0] + edges[1])
+    cos_q = 1.0 - (2 * k * (m1 + m2) * w**2 - m1 * m2 * w**4) / (2 * k**2)
+    mu = float(np.arccosh(-cos_q))
+    cells = line.n // 2
+    r.value("mid_gap_mu", mu, "the infinite chain's decay per cell at mid-gap")
+    r.value("mid_gap_decay", np.exp(-mu * cells), f"e^(-mu {cells}): its decay over the "
+                                                  f"chain's {cells} cells")
+    r.value("periods_min", int(t["periods"].values.min()), "fewest periods fitted in a run")
+    r.value("periods_max", int(t["periods"].values.max()), "most periods fitted in a run")
     return r

@@ -3,7 +3,9 @@
 Each gallery analysis file (``chainrun.analysis.gallery``) holds its series under one or
 two groups; every series names its ``panel`` (0 or 1) and, for markers, the paper's
 symbol it takes (``marker``). ``draw(data)`` lays the panels out and labels the axes of
-each item; nothing is computed here.
+each item; nothing is computed here. ``gallery-transmission`` is the transmission
+curve of ``chainrun plot OUTDIR`` (``chainrun.plotting.transmission``), drawn from the
+arrays its analysis file keeps.
 """
 
 from __future__ import annotations
@@ -49,7 +51,28 @@ PANELS = {
 }
 
 
+def _transmission(data) -> Figure:
+    """The transmission curve of ``gallery-transmission``, as ``chainrun plot`` draws a
+    sweep's, in SI."""
+    import xarray as xr
+
+    from chainrun.plotting.transmission import draw_transmission
+
+    a = {key.partition("/")[2]: value for key, value in data.arrays.items()
+         if key.startswith("curve/")}
+    ds = xr.Dataset(
+        {"transmission": (("frequency", "sensor", "harmonic"), a["transmission"][:, :, None]),
+         "periods": ("frequency", a["periods"]),
+         "mode_frequency": ("mode", a["mode_frequency"]),
+         "band_bottom": ("branch", a["band_bottom"]), "band_top": ("branch", a["band_top"])},
+        coords={"frequency": a["frequency"], "sensor": a["sensor"], "harmonic": [1]},
+        attrs={"units": "SI", "driven_wall": "left"})
+    return draw_transmission(ds, data.settings.get("description", ""))
+
+
 def draw(data) -> Figure:
+    if data.name == "gallery-transmission":
+        return _transmission(data)
     panels = PANELS[data.name]
     figure = Figure(figsize=(4.8 * len(panels), 3.6))
     for i, (group, xlabel, ylabel, xscale, yscale) in enumerate(panels):

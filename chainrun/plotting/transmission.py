@@ -74,11 +74,11 @@ def draw_transmission(ds, title: str = "") -> Figure:
     wall = ds.attrs.get("driven_wall", "driven")
     axes.set_ylabel(f"transmission: force amplitude / $K_w A$ ({wall} wall)")
     figure.legend(handles=handles, fontsize="small", loc="outside lower center",
-                  ncols=min(4, len(handles)), frameon=False)
+                  ncols=min(5, len(handles)), frameon=False)
     periods = ds["periods"].values
     fitted = (f"{periods.min()}" if periods.min() == periods.max()
               else f"{periods.min()}-{periods.max()}")
     axes.set_title("\n".join(filter(None, [
-        title, f"at the drive's frequency, a least-squares fit over the last {fitted} "
+        title, f"At the drive's frequency: a least-squares fit over the last {fitted} "
                f"periods of each run"])), fontsize="small")
     return figure
