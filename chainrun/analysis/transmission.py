@@ -16,10 +16,11 @@ sensors of a run (``output.sensors``) whose wall moves by a sine
 
   f the drive's frequency. Over whole periods the harmonics are orthogonal, so each
   ``a_k`` is what a discrete Fourier transform at k f would give, without its leakage
-  from a window cut inside a period. ``phi_k`` is the phase relative to the drive's
-  own sine ``A sin(2 pi f t)`` (its k-th harmonic), in (-pi, pi]; the rms of what the
-  fit leaves is ``residual``, the part of the signal that is not steady at f: the
-  modes the start excited, and any other frequency;
+  from a window cut inside a period. ``phi_k``, in (-pi, pi], is the phase against
+  ``sin(2 pi k f t)``, the drive's own clock (the wall moves by ``A sin(2 pi f t)``; a
+  negative A is a phase of pi); the rms of what the fit leaves is ``residual``, the
+  part of the signal that is not steady at f: the modes the start excited, and any
+  other frequency;
 - the *transmission* is each amplitude over the force the drive would put on a held
   ball, ``K_w |A|``: the drive's amplitude A times the linear stiffness ``K_w`` of the
   driven wall's contact at the static state (``chainrun.analysis.spectrum``). It is a
@@ -277,8 +278,8 @@ def measure(run, *, harmonics: int = HARMONICS, start: float | None = None,
             "units": u["force"], "long_name": "amplitude of the sensor's mean force at k "
                                               "times the drive's frequency"}),
         "phase": (("harmonic", "sensor"), phase, {
-            "units": "rad", "long_name": "phase of that harmonic relative to the drive's "
-                                         "sine A sin(2 pi k f t)"}),
+            "units": "rad", "long_name": "phase of that harmonic: the force's component "
+                                         "is amplitude sin(2 pi k f t + phase)"}),
         "transmission": (("harmonic", "sensor"), amp / reference, {
             "units": "1", "long_name": "amplitude over the drive's force on a held ball, "
                                        "reference_force"}),
