@@ -502,9 +502,10 @@ def transmission(run, *, harmonics: int = 3, start: float | None = None,
 
     Parameters
     ----------
-    run : xarray.Dataset or path
-        A run (``open_run``, ``simulate``) or a sweep (``open_sweep``), or the path of
-        a run file or of an output folder (its ``index.h5``: the sweep).
+    run : xarray.Dataset, xarray.DataTree or path
+        A run (``open_run``, ``simulate``) or a sweep (``open_sweep``, or the DataTree
+        ``simulate`` returns for one), or the path of a run file or of an output folder
+        (its ``index.h5``: the sweep).
     harmonics : int
         Fit the drive's frequency f and its multiples up to ``harmonics`` f.
     start : float, optional
@@ -548,6 +549,9 @@ def transmission(run, *, harmonics: int = 3, start: float | None = None,
     from chainrun.store import read_index, read_run
 
     options = dict(harmonics=harmonics, start=start, periods=periods)
+    if isinstance(run, xr.DataTree):       # simulate's sweep: a child per run
+        return measure_sweep([child.to_dataset().assign_attrs(run_id=name)
+                              for name, child in run.children.items()], **options)
     if isinstance(run, xr.Dataset):
         return measure_sweep(run, **options) if "run" in run.dims else measure(run, **options)
     folder = Path(run)

@@ -326,8 +326,9 @@ def measure_sweep(runs, **options) -> xr.Dataset:
 
     Parameters
     ----------
-    runs : xarray.Dataset or list of chainrun.store.RunData
-        A sweep (``chainrun.open_sweep``: a dimension ``run``), or its run files read.
+    runs : xarray.Dataset, or list of xarray.Dataset or chainrun.store.RunData
+        A sweep (``chainrun.open_sweep``: a dimension ``run``), or its runs one by one
+        (Datasets named by their ``run_id`` attribute, or run files read).
     **options
         ``harmonics``, ``start``, ``periods``: as ``measure``'s.
 
@@ -347,7 +348,8 @@ def measure_sweep(runs, **options) -> xr.Dataset:
         ids = [str(run_id) for run_id in runs["run"].values]
         runs = [runs.isel(run=i).assign_attrs(run_id=run_id) for i, run_id in enumerate(ids)]
     else:
-        ids = [str(run.parameters.get("run_id", i)) for i, run in enumerate(runs)]
+        ids = [str(run.parameters.get("run_id", i)) if isinstance(run, RunData)
+               else str(run.attrs.get("run_id", i)) for i, run in enumerate(runs)]
     results = []
     for run_id, run in zip(ids, runs):
         try:

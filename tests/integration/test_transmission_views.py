@@ -47,6 +47,9 @@ def test_a_folder_its_dataset_and_a_run_give_the_same_transmission(sweep):
     assert curve.transmission.dims == ("frequency", "sensor", "harmonic")
     same = chainrun.transmission(chainrun.open_sweep(sweep))
     np.testing.assert_array_equal(same.transmission.values, curve.transmission.values)
+    tree = chainrun.simulate(sweep.parent / "experiment.toml")      # the same sweep
+    np.testing.assert_array_equal(chainrun.transmission(tree).transmission.values,
+                                  curve.transmission.values)
     one = chainrun.transmission(sweep / "left_motion_frequency=0.3.h5")
     np.testing.assert_array_equal(one.amplitude.values,
                                   curve.amplitude.sel(frequency=0.3).values)
