@@ -799,28 +799,25 @@ class RunWriter:
         likewise the work the drives did (0 on a line without them)."""
         n, energy = self._n, UNITS[self._units]["energy"]
         times = np.asarray(sol.times, dtype=np.float64)
-        element = _Element(h5["observables"], "dissipated_energy", (), [],
-                           len(times), "energy dissipated by the damping since t = 0")
-        dissipated = np.asarray(sol.dissipated, dtype=np.float64)
-        if dissipated.size != times.size:  # an elastic line: nothing was dissipated
-            dissipated = np.zeros(times.size)
-        for i, (t, d) in enumerate(zip(times, dissipated)):
-            element.append(i, float(t), float(d))
-        element.flush()
-        element.value.attrs["unit"] = energy
-        element.time.attrs["unit"] = UNITS[self._units]["time"]
+
+        def observable(name: str, values, description: str) -> None:
+            # an energy by each snapshot; a line without it stores zeros
+            element = _Element(h5["observables"], name, (), [], len(times), description)
+            values = np.asarray(values, dtype=np.float64)
+            if values.size != times.size:
+                values = np.zeros(times.size)
+            for i, (t, v) in enumerate(zip(times, values)):
+                element.append(i, float(t), float(v))
+            element.flush()
+            element.value.attrs["unit"] = energy
+            element.time.attrs["unit"] = UNITS[self._units]["time"]
+
+        observable("dissipated_energy", sol.dissipated,
+                   "energy dissipated by the damping since t = 0")
         results.attrs["dissipated_energy"] = np.float64(sol.dissipated_energy)
         results.attrs["dissipated_energy_unit"] = energy
-        element = _Element(h5["observables"], "drive_work", (), [], len(times),
-                           "work the drives (moving walls, forces in time) did since t = 0")
-        work = np.asarray(sol.drive_work, dtype=np.float64)
-        if work.size != times.size:  # a line without drives
-            work = np.zeros(times.size)
-        for i, (t, w) in enumerate(zip(times, work)):
-            element.append(i, float(t), float(w))
-        element.flush()
-        element.value.attrs["unit"] = energy
-        element.time.attrs["unit"] = UNITS[self._units]["time"]
+        observable("drive_work", sol.drive_work,
+                   "work the drives (moving walls, forces in time) did since t = 0")
         results.attrs["drive_work"] = np.float64(sol.drive_energy)
         results.attrs["drive_work_unit"] = energy
         contact = _scale(results, "contact", np.arange(1, n, dtype=np.int64),
