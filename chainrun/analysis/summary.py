@@ -163,10 +163,26 @@ def describe_line(line, units: str) -> str:
     parts.append("walls: " + (", ".join(walls) if walls else "none"))
     for side, w in (("left", line.left), ("right", line.right)):
         if w is not None and w.motion is not None:
-            parts.append(f"the {side} wall moves by {w.motion.describe()}")
+            parts.append(f"the {side} wall moves by "
+                         f"{_drive_text(w.motion, 'position', units)}")
     for ball, drive in line.drives:
-        parts.append(f"ball {ball + 1} driven by a force {drive.describe()}")
+        parts.append(f"ball {ball + 1} driven by a force {_drive_text(drive, 'force', units)}")
     return "; ".join(parts)
+
+
+def _drive_text(drive, quantity: str, units: str) -> str:
+    """A drive (``chainrun.solver.Drive``) for a person, in the run's units: its sines'
+    amplitudes (a ``quantity``), frequencies and ramps, or its samples."""
+    from chainrun.units import format_value
+
+    if drive.times is not None:
+        return (f"a spline through {drive.times.size} samples to t = "
+                f"{format_value(float(drive.times[-1]), 'time', units)}, held after")
+    return " + ".join(
+        f"{format_value(s.amplitude, quantity, units)} sin(2 pi f t), f = "
+        f"{format_value(s.frequency, 'frequency', units)}"
+        + (f", ramp {format_value(s.ramp, 'time', units)}" if s.ramp else "")
+        for s in drive.sines)
 
 
 def summarize(run) -> RunSummary:

@@ -135,9 +135,10 @@ def _check(s) -> str:
             f"speed{hold}; {worst}")
 
 
-def render(s, pulses=None) -> str:
+def render(s, sensors=()) -> str:
     """The summary (``chainrun.analysis.summary.RunSummary``) as lines of text, in the
-    run's units; ``pulses`` (``chainrun.analysis.pulse.Pulses``) adds a section."""
+    run's units; ``sensors``, lines of what its force sensors recorded (``_sensors``),
+    add a section."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
     from chainrun.runner import momentum_text
@@ -182,7 +183,7 @@ def render(s, pulses=None) -> str:
         *_balls(s, threshold),
         f"energy    {_shares(s)}",
         *damping,
-        *(_pulse_lines(pulses) if pulses is not None else []),
+        *sensors,
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor ball{'s' * (s.sensors != 1)} at {s.samples} "
            "samples" if s.sensors else ""),
@@ -256,11 +257,41 @@ def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
     return "\n".join(lines)
 
 
-def _pulses(run):
-    """The run's pulse measurements, or None for a run without sensors."""
+def _sensors(run) -> list[str]:
+    """The section of what the run's force sensors recorded: the pulses
+    (``measure_pulses``), or for a line driven by a wall's sine its steady response
+    (``chainrun.analysis.transmission``); none without sensors, or for a drive the
+    transmission does not take."""
     from chainrun.analysis.pulse import measure_pulses
 
-    return measure_pulses(run) if run.sensor_balls.size else None
+    if not run.sensor_balls.size:
+        return []
+    line = run.line
+    if not (line.drives or any(w is not None and w.motion is not None
+                               for w in (line.left, line.right))):
+        return _pulse_lines(measure_pulses(run))
+    from chainrun.analysis.transmission import measure
+
+    try:
+        steady = measure(run, harmonics=1)
+    except ChainrunError:
+        return []
+    return _steady_lines(steady, run.units)
+
+
+def _steady_lines(tr, units: str) -> list[str]:
+    """The steady response at the drive's frequency: a line per sensor."""
+    from chainrun.units import format_value
+
+    head = (f"at f = {format_value(float(tr.frequency), 'frequency', units)}, over the "
+            f"last {int(tr.periods)} periods (chainrun.transmission):")
+    lines = [head] + [
+        f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
+        f"{float(ph):.3f} rad, transmission {float(x):.4g}"
+        for ball, a, ph, x in zip(tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
+                                  tr.phase.sel(harmonic=1).values,
+                                  tr.transmission.sel(harmonic=1).values)]
+    return [("steady    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 
 @click.command()
@@ -279,7 +310,8 @@ def info(paths: tuple[Path, ...]):
     behind, how the impact energy is shared among them, the contacts and walls and
     the damping, the pulses its force sensors recorded (the peak contact force, its
     time, the pulse's width and arrival at each sensor, and the wave's speed fitted
-    through them), and what the file stores. For an output folder (a sweep or an
+    through them) or, for a line a wall drives by a sine, their steady amplitude,
+    phase and transmission at the drive's frequency, and what the file stores. For an output folder (a sweep or an
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
     deviation and range of each number over the runs when they are an ensemble (the
     same line over random seeds); the full summary when the folder holds a single run.
@@ -306,12 +338,12 @@ def info(paths: tuple[Path, ...]):
                 summaries = [summarize(read_run(path / str(r["file"]))) for r in rows]
                 if len(summaries) == 1:
                     run = read_run(path / str(rows[0]["file"]))
-                    click.echo(render(summaries[0], _pulses(run)))
+                    click.echo(render(summaries[0], _sensors(run)))
                 else:
                     runs = [read_run(path / str(r["file"])) for r in rows]
                     click.echo(render_folder(path, summaries, is_ensemble(runs)))
             else:
                 run = read_run(path)
-                click.echo(render(summarize(run), _pulses(run)))
+                click.echo(render(summarize(run), _sensors(run)))
     except ChainrunError as exc:
         fail(str(exc))

@@ -194,3 +194,26 @@ def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
         newtons = float(re.search(r"peak contact force ([\d.]+) N", line).group(1))
         assert newtons == pytest.approx(0.63955 * force, rel=2e-4)
     assert re.search(r"wave speed [\d.]+ m/s \(a fit through 2 sensors", out_text)
+
+
+def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
+    # The example's 2 kHz run: its drive in the run's units, and each sensor's steady
+    # amplitude at the drive's frequency as chainrun.transmission measures it.
+    import chainrun
+
+    out = tmp_path / "driven"
+    config = (CONFIGS / "examples" / "driven-dimer.toml").read_text()
+    config = config.replace('"walls.left.motion.frequency" = [2000.0, 5000.0]',
+                            '"walls.left.motion.frequency" = [2000.0]')
+    (tmp_path / "driven.toml").write_text(config)
+    result = CliRunner().invoke(main, ["simulate", str(tmp_path / "driven.toml"), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    path = next(p for p in out.glob("*.h5") if p.name != "index.h5")
+    text = info(path).output
+    assert "the left wall moves by 10 nm sin(2 pi f t), f = 2 kHz, ramp 1 ms" in text
+    assert "pulses" not in text
+    steady = chainrun.transmission(path)
+    for ball in (1, 10, 20):
+        a = float(steady.amplitude.sel(sensor=ball, harmonic=1)) * 1e3
+        line = next(s for s in text.splitlines() if f"ball {ball}: amplitude" in s)
+        assert re.search(rf"amplitude {a:.4g} mN", line), (line, a)
