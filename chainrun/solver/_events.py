@@ -402,7 +402,7 @@ def _find_event(S):
 def _grazes(S, h):
     """Whether a contact of the window passes a minimum of its compression inside the
     series step [0, h] (its rate below 0 at the start, above 0 at the end) and comes
-    below half its start there (``_series_bounds``' lower bound, after ``_find_event``).
+    below half its start (above 0) there (``_series_bounds``' lower bound, after ``_find_event``).
 
     Near such a graze c(t)^alpha has branch points close to the real axis, at the
     complex times where c vanishes; they bound the series' radius of convergence, and
@@ -416,7 +416,10 @@ def _grazes(S, h):
     for p in range(S.ints[I_M] - 1):
         if MK[p] == 0.0 or (mode == MODE_MIXED and S.WP[W_ALPHA, p] == 1.0):
             continue
-        if not (W[_tw(p, LO_ROW)] < 0.5 * W[_tw(p, 0)] and W[_tw(p, 1)] < 0.0):
+        c0 = W[_tw(p, 0)]
+        # (a compression within rounding of 0 or below, a contact just closed, has no
+        # start to fall below half of)
+        if not (c0 > 0.0 and W[_tw(p, LO_ROW)] < 0.5 * c0 and W[_tw(p, 1)] < 0.0):
             continue
         rate = PT * W[_tw(p, PT)]
         for k in range(PT - 1, 0, -1):

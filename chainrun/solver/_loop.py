@@ -625,7 +625,7 @@ def advance(S):
                 err = _taylor_error(S, h)
                 S.ints[I_XEND] = 0
                 th, j, kind, lev = _find_event(S)
-                if j < 0 and _grazes(S, h):
+                if j < 0 and h > 64.0 * EPS * max(1.0, abs(t)) and _grazes(S, h):
                     # past a graze the series is not to be trusted (_grazes): halve
                     # until the step ends before the compression's minimum or keeps
                     # it above half its start

@@ -326,6 +326,22 @@ def test_a_contact_grazing_under_forces_keeps_the_energy():
                                atol=TOL["reference_velocity"])
 
 
+def test_a_contact_closed_to_rounding_is_no_graze():
+    # Found by the long fuzzer run: an active contact whose compression is -2e-15 (just
+    # closed, within rounding) and falling at the series step's start made the graze
+    # rule halve the step without end. The run reaches t = 1 in a dozen steps.
+    line = Line.make(10, mass=[1.1289831396369512, 1.0, 0.49968117813123003, 1.0,
+                               1.4286672007331265, 1.0, 1.7540069861213943,
+                               0.13032144995125555, 1.0, 6.996000610866246],
+                     alpha=[2.8501929113817557, 2.8501929113817557, 1.9, 1.0000000000000002,
+                            2.1966249128820605, 2.6987585022618616, 1.0, 2.0271273468736037,
+                            2.5],
+                     velocity=[1.0] + [0.0] * 9)
+    sol = run(line, t_end=1.0, max_events=1000)
+    assert sol.outcome == Outcome.STOP_TIME, sol.message
+    assert sol.diagnostics.steps < 100
+
+
 def test_bouncing_ball_under_a_force():
     # A ball pressed on a linear wall by a constant force (gravity): parabolic flights
     # between bounces of closed-form duration; no terminal state, so t_end.
