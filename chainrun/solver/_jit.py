@@ -6,10 +6,11 @@ calls them) and ``entry`` for what Python calls (cached; the solver has one,
 ``_loop.advance``, so that a run loads one library). Both are compiled
 without numba's reference counting: the kernels allocate nothing.
 
-The cache lives in a folder of its own, named by a hash of the solver's sources and of
-the compiler's versions (``cache_dir``). numba's own cache notices a change in the file
-of an entry point but not in a kernel it calls from another file, nor a change in the
-generated code; a folder keyed by every source cannot go stale. ``NUMBA_CACHE_DIR``, if
+The cache lives in a folder of its own, named by a hash of the kernels' sources (the
+entry point's module and every solver module it imports) and of the compiler's versions
+(``cache_dir``). numba's own cache notices a change in the file of an entry point but
+not in a kernel it calls from another file, nor a change in the generated code; a folder
+keyed by every source the kernels are made of cannot go stale. ``NUMBA_CACHE_DIR``, if
 set, is where that folder goes; otherwise the user's cache folder.
 
 Entry points compile with LLVM's SLP vectoriser on (numba leaves it off by default):
@@ -72,12 +73,40 @@ def entry(fn):
     return dispatcher
 
 
+#: the module whose ``entry`` Python calls; every kernel is reached from its imports
+ENTRY_MODULE = "_loop"
+
+
+def kernel_sources(folder: Path = Path(__file__).parent) -> list[Path]:
+    """The solver's files compiled into its entry point: ``ENTRY_MODULE`` and every
+    module of the package it imports, directly or through another (found by reading
+    their ``import`` statements, not by running them)."""
+    import ast
+
+    seen: dict[str, Path] = {}
+    todo = [ENTRY_MODULE]
+    while todo:
+        name = todo.pop()
+        path = folder / f"{name}.py"
+        if name in seen or not path.exists():
+            continue
+        seen[name] = path
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                parts = node.module.split(".")
+                if parts[:2] == ["chainrun", "solver"] and len(parts) == 3:
+                    todo.append(parts[2])
+    return sorted(seen.values())
+
+
 def source_hash(folder: Path = Path(__file__).parent) -> str:
-    """sha256 of the solver package's sources and of the Python, numba, llvmlite versions."""
+    """sha256 of the kernels' sources (``kernel_sources``) and of the Python, numba and
+    llvmlite versions. A change in the solver's Python side (the driver, the model, the
+    physics) keeps the compiled kernels."""
     import llvmlite
 
     h = hashlib.sha256()
-    for path in sorted(folder.glob("*.py")):
+    for path in kernel_sources(folder):
         h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     versions = f"{sys.version_info[:3]} numba {nb.__version__} llvmlite {llvmlite.__version__}"
     h.update(versions.encode())

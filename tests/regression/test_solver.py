@@ -574,10 +574,13 @@ def test_generated_stages_are_current():
     assert _codegen.main(["--check"]) == 0
 
 
-def test_the_kernels_cache_is_keyed_by_every_solver_source(tmp_path):
+def test_the_kernels_cache_is_keyed_by_every_kernel_source(tmp_path):
     """numba's cache notices a change in an entry point's file only; the folder the
-    kernels are cached in is named by every source of the solver package, so a change
-    in any of them (a kernel in another file, the generated code) compiles anew."""
+    kernels are cached in is named by every source they are compiled from (the entry
+    point's module and every solver module it imports), so a change in any of them (a
+    kernel in another file, the generated code) compiles anew, and a change in the
+    solver's Python side (the driver, the model) keeps the compiled kernels."""
+    import ast
     import shutil
 
     from chainrun.solver import _jit
@@ -586,17 +589,26 @@ def test_the_kernels_cache_is_keyed_by_every_solver_source(tmp_path):
     copy = tmp_path / "solver"
     shutil.copytree(solver, copy, ignore=shutil.ignore_patterns("__pycache__"))
     names = sorted(p.name for p in copy.glob("*.py"))
-    assert {"_loop.py", "_generated.py", "_jit.py", "_driver.py"} <= set(names)
-    seen = {_jit.source_hash(copy)}
-    assert seen == {_jit.source_hash(solver)}
+    kernels = {p.name for p in _jit.kernel_sources(copy)}
+    # every module that defines a kernel is a source of the key
+    for name in names:
+        tree = ast.parse((copy / name).read_text())
+        decorated = any(
+            isinstance(d, (ast.Name, ast.Call)) and ast.unparse(d).split("(")[0] in ("kernel", "entry")
+            for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+            for d in node.decorator_list)
+        assert not decorated or name in kernels, name
+    assert {"_loop.py", "_generated.py", "_jit.py", "_state.py"} <= kernels
+    assert not {"_driver.py", "model.py", "__init__.py", "_codegen.py"} & kernels
+    before = _jit.source_hash(copy)
+    assert before == _jit.source_hash(solver)
     for name in names:
         path = copy / name
         text = path.read_text()
         path.write_text(text + "\n# changed\n")
-        seen.add(_jit.source_hash(copy))
+        assert (_jit.source_hash(copy) != before) == (name in kernels), name
         path.write_text(text)
-    assert len(seen) == len(names) + 1
-    assert _jit.source_hash(copy) == _jit.source_hash(solver)
+    assert _jit.source_hash(copy) == before
 
 
 def test_the_entry_points_are_cached_under_the_keyed_folder():
