@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 from pathlib import Path
 
 from benchmarks.harness import ROOT, fmt_e, fmt_t
@@ -30,10 +31,12 @@ def markdown_path(path: Path) -> Path:
     return path.with_suffix(".md")
 
 
-def entry(result, *, meta: dict, load_start, load_end, wall: float, notes: list) -> dict:
-    """A section's entry: its result and the circumstances of its run."""
+def entry(result, *, meta: dict, date: str, load_start, load_end, wall: float,
+          notes: list) -> dict:
+    """A section's entry: its result and the circumstances of its run (``date``: when
+    it started; ``meta``: the bench run's commit, mode, machine and versions)."""
     machine = meta["machine"]
-    return {"commit": meta["git_commit"], "date": meta["date"], "mode": meta["mode"],
+    return {"commit": meta["git_commit"], "date": date, "mode": meta["mode"],
             "machine": {k: machine.get(k) for k in ("cpu", "machine", "cpus", "memory_gb")},
             "versions": meta["versions"], "load_start": list(load_start),
             "load_end": list(load_end), "wall": wall, "notes": list(notes),
@@ -116,11 +119,14 @@ def readme_block(data: dict) -> str:
         others = []
         for name, label in (("scipy", "scipy's DOP853"), ("heyoka", "heyoka")):
             t = tools.get(name)
-            if t is not None and t.get("time") is not None:
+            if t is None:
+                others.append(f"{label} (not installed)")
+            elif t.get("time") is not None:
                 others.append(f"{fmt_t(t['time'])} s for {label}")
+            elif t.get("skipped"):
+                others.append(f"{label} (skipped: {t['skipped']})")
             else:
-                why = "not run" if t is None else (t.get("skipped") or t.get("error"))
-                others.append(f"{label} {why}" if t else f"{label} not installed")
+                others.append(f"{label} (failed: {t.get('error')})")
         sentences.append(
             f"A Hertz line of {_balls(case['n'])} (K = 1, until t = {case['t_stop']:g}) "
             f"takes {fmt_t(cr['time'])} s in the solver ({fmt_t(cr['process_time'])} s for "
@@ -158,7 +164,8 @@ def readme_block(data: dict) -> str:
         f"at load average {load} ({', '.join(dates)}; "
         f"commit {', '.join(commits)}; sections {', '.join(used)} of "
         "[benchmarks/results.md](benchmarks/results.md)); its speed moves with the load.")
-    return "\n".join(sentences)
+    return textwrap.fill(" ".join(sentences), width=88, break_long_words=False,
+                         break_on_hyphens=False)
 
 
 def readme_text(text: str, data: dict) -> str:

@@ -211,9 +211,10 @@ def main(argv=None) -> int:
             if name not in args.only:
                 continue
             load_start, t0, noted = os.getloadavg(), time.perf_counter(), len(ctx.notes)
+            date = dt.datetime.now().isoformat(timespec="seconds")
             ctx.results[name] = module(name).run(ctx)
             data = results.update(results_file, name, results.entry(
-                ctx.results[name], meta=meta, load_start=load_start,
+                ctx.results[name], meta=meta, date=date, load_start=load_start,
                 load_end=os.getloadavg(), wall=time.perf_counter() - t0,
                 notes=ctx.notes[noted:]))
     finally:

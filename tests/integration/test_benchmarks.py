@@ -336,15 +336,15 @@ def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
     from benchmarks.sections.compilation import CompileResult
     from benchmarks.sections.targets import Target, TargetsResult
 
-    meta = {"git_commit": "c" * 40, "date": "2026-11-24T08:00:00", "mode": "default",
+    meta = {"git_commit": "c" * 40, "mode": "default",
             "machine": {"cpu": "x", "machine": "x86_64", "cpus": 2, "memory_gb": 24},
             "versions": {"chainrun": "0"}}
     path = tmp_path / "results.json"
 
     def put(name, result):
         return results.update(path, name, results.entry(
-            result, meta=meta, load_start=(1.5, 1, 1), load_end=(2.5, 1, 1), wall=3.0,
-            notes=["a note"]))
+            result, meta=meta, date="2026-11-24T08:00:00", load_start=(1.5, 1, 1),
+            load_end=(2.5, 1, 1), wall=3.0, notes=["a note"]))
 
     targets = TargetsResult([Target("Hertz", 10**6, 1.5, 10.0, walls=[7.5, 8.0, 7.9],
                                     cpus=[7.0, 7.1, 7.2], runs_within_limit=3, met=True)])
@@ -363,7 +363,7 @@ def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
     md = results.markdown_path(path).read_text()
     assert md == results.render(load)
     assert "load average 1.5 at the start, 2.5 at the end" in md and "Note: a note" in md
-    block = results.readme_block(load)
+    block = " ".join(results.readme_block(load).split())
     assert "a linear line of 10^5 balls 3.00 s" in block
     assert "compiles the solver in 79 s" in block and "0.50-0.60 s" in block
     assert "load average 1.5 to 2.5" in block
@@ -392,3 +392,40 @@ def test_the_solver_is_called_in_one_place():
                 calling.add(path)
     assert calling <= allowed, sorted(str(p.relative_to(root)) for p in calling - allowed)
     assert root / "benchmarks" / "harness.py" in calling
+
+
+def test_the_harness_imports_run_one_way():
+    """peers <- harness <- worktree <- sections <- results <- run: a section imports
+    the shared helpers and no part above it, and the helpers import no section."""
+    import ast
+    from pathlib import Path
+
+    root = Path(harness.__file__).resolve().parents[1]
+    rank = {"benchmarks.peers": 0, "benchmarks.harness": 1, "benchmarks.worktree": 2,
+            "benchmarks.sections": 3, "benchmarks.against_lammps": 3,
+            "benchmarks.results": 4, "benchmarks.run": 5}
+
+    def part(name):
+        while name and name not in rank:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    wrong = []
+    for path in sorted((root / "benchmarks").rglob("*.py")):
+        rel = path.relative_to(root).with_suffix("")
+        name = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+        src = part(name)
+        if src is None:
+            continue                                    # a script of its own
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                targets = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                continue
+            for target in targets:
+                dst = part(target)
+                if dst is not None and dst != src and rank[dst] > rank[src]:
+                    wrong.append((name, target))
+    assert not wrong, wrong
