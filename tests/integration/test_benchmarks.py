@@ -331,6 +331,20 @@ def test_previous_version_needs_a_parent(tmp_path):
 # --- the results file, and the numbers README.md quotes from it -------------------------
 
 
+def test_readme_quotes_the_results_file():
+    """README.md's measured numbers are the block the bench writes from
+    benchmarks/results.json, and results.md is that file rendered: neither can drift
+    from what was measured."""
+    from benchmarks import results
+
+    data = results.load()
+    assert {"peers", "targets", "compile"} <= set(data["sections"])
+    text = results.README.read_text()
+    assert text.count(results.BEGIN) == 1 and text.count(results.END) == 1
+    assert results.readme_text(text, data) == text
+    assert results.markdown_path(results.RESULTS).read_text() == results.render(data)
+
+
 def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
     from benchmarks import results
     from benchmarks.sections.compilation import CompileResult
