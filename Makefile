@@ -28,8 +28,8 @@ INSTALLER = install="$(BIN)/python -m pip install --quiet"; \
 	  if $(BIN)/python -m uv --version > /dev/null 2>&1; then \
 	    install="$(BIN)/python -m uv pip install --quiet --compile-bytecode --python $(BIN)/python"; fi
 
-# The solver is compiled for this machine once, here, into its cache (about 75 s on two
-# cores): a first `chainrun simulate` then starts at once. The compiler keeps one core
+# The solver is compiled for this machine once, here, into its cache (benchmarks/results.md
+# has how long it takes): a first `chainrun simulate` then starts at once. The compiler keeps one core
 # busy; the test tools install on the other meanwhile (the extras' packages alone, so
 # that the package the compiler imports is not reinstalled under it).
 $(STAMP): pyproject.toml

@@ -30,20 +30,22 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from benchmarks.harness import (REFERENCE_RTOL, SI_LINE, Context, Processes, config_text,
+                                fmt_e, fmt_t, log, solve, table)
 from benchmarks.peers import lammps_peer as lp
-from benchmarks.run import (SI_LINE, Processes, config_text, fmt_e, fmt_t, log, table)
+from benchmarks.sections import Result
 
 #: The lines: chainrun's keys of ``[chain]`` beside n and k.
 LINES = {"elastic": dict(SI_LINE),
          "damped": dict(SI_LINE, restitution=0.9, damping_law="tsuji")}
 #: LAMMPS's time steps, as fractions of the two-ball contact time: dt = t_c / f.
 STEP_FRACTIONS = (20, 50, 100, 200, 400, 1000)
-#: chainrun's tolerances, and that of its reference.
+#: chainrun's tolerances (its reference's is the bench's ``REFERENCE_RTOL``).
 RTOLS = (1e-6, 1e-9, 1e-12)
-REFERENCE_RTOL = 1e-14
 #: The time steps of the timed runs: LAMMPS's largest error is this fraction of the
 #: impact speed.
 TARGET_ERROR = 1e-3
@@ -108,15 +110,11 @@ def grid(t_end: float, t_mid: float, t_c: float, fraction: float) -> tuple[float
 
 def _chainrun_at(line, times, rtol=REFERENCE_RTOL) -> np.ndarray:
     """chainrun's velocities at ``times`` (the last is the end), shape (T, N)."""
-    from chainrun.solver import simulate_line
-
-    return simulate_line(line, times, t_end=times[-1], rtol=rtol).velocities
+    return solve(line, times, t_end=times[-1], rtol=rtol).velocities
 
 
 def _terminal_time(line, rtol=REFERENCE_RTOL) -> float:
-    from chainrun.solver import simulate_line
-
-    sol = simulate_line(line, rtol=rtol)
+    sol = solve(line, rtol=rtol)
     if not sol.terminal:
         raise RuntimeError(f"chainrun did not reach the terminal state: {sol.message}")
     return sol.end_time
@@ -127,14 +125,14 @@ def _terminal_time(line, rtol=REFERENCE_RTOL) -> float:
 
 def two_ball() -> dict:
     """The Hertz law and the restitution of two balls, LAMMPS against chainrun."""
-    from chainrun.solver import EventKind, simulate_line
+    from chainrun.solver import EventKind
 
     out = {}
     line, spheres, t_c, same = lines("elastic", 2)
     v0 = float(line.velocity[0])
     dt = t_c / TWO_BALL_FRACTION
     marks = (TWO_BALL_FRACTION // 4, 3 * TWO_BALL_FRACTION // 2)
-    sol = simulate_line(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
+    sol = solve(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
     opened = sol.event_time[sol.event_kind == EventKind.OPEN]
     r = lp.run(spheres, dt, marks, contact=True)
     v = r.velocities[marks[-1]]
@@ -147,7 +145,7 @@ def two_ball() -> dict:
         "end_diff": float(np.max(np.abs(v - sol.velocities[-1])))}
 
     line, matched, _, _ = lines("damped", 2)
-    sol = simulate_line(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
+    sol = solve(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
     out["chainrun_damped"] = float((sol.velocities[-1, 1] - sol.velocities[-1, 0]) / v0)
     settings = []
     for damping, e, limit in (("tsuji", 0.9, False), ("tsuji", 0.9, True),
@@ -338,8 +336,9 @@ def cost(kind: str, n: int, target: float | None, acc: dict, procs: Processes, *
         lam["mid"] = float(np.max(np.abs(velocities[n_mid] - mid_ref)))
         lam["end"] = float(np.max(np.abs(velocities[n_end] - reference.final_velocity)))
         lam["worst"] = max(lam["mid"], lam["end"]) / v0
-    # the other steps' times at this N, from the same cost per step
-    lam["at_fraction"] = {r["fraction"]: lam["start_up"] + lam["per_step"]
+    # the other steps' times at this N, from the same cost per step (keyed by the
+    # fraction as text, as JSON keeps it)
+    lam["at_fraction"] = {str(r["fraction"]): lam["start_up"] + lam["per_step"]
                           * (grid(t_end, t_mid, t_c, r["fraction"])[2] - 1)
                           for r in acc["lammps"]}
     out["lammps"] = lam
@@ -353,26 +352,48 @@ def cost(kind: str, n: int, target: float | None, acc: dict, procs: Processes, *
 # --- the section and its report ------------------------------------------------------------
 
 
-def section(mode, procs: Processes, notes: list[str]) -> dict:
-    """Sections 1-3 above for the bench (``mode``: ``benchmarks.run.Mode``)."""
+@dataclass
+class LammpsResult(Result):
+    """What ``run`` measured (each part a dict, as ``report`` reads it), or why LAMMPS
+    was skipped."""
+
+    skipped: str | None = None
+    version: str | None = None
+    load_start: tuple | None = None
+    load_end: tuple | None = None
+    target_error: float = TARGET_ERROR
+    cap: float | None = None
+    two_ball: dict | None = None
+    accuracy: dict | None = None
+    cost: list | None = None
+
+    def lines(self) -> list[str]:
+        return report({k: v for k, v in asdict(self).items() if v is not None})
+
+
+RESULT = LammpsResult
+
+
+def run(ctx: Context) -> LammpsResult:
+    """Sections 1-3 above for the bench, within the bounds of ``ctx.mode``."""
+    mode = ctx.mode
     ok, why = lp.available()
     if not ok:
-        notes.append(f"LAMMPS skipped: {why}")
+        ctx.notes.append(f"LAMMPS skipped: {why}")
         log(f"lammps: skipped, {why}")
-        return {"skipped": why}
-    out = {"version": lp.version(), "load_start": os.getloadavg(),
-           "target_error": TARGET_ERROR, "cap": mode.lammps_cap}
+        return LammpsResult(skipped=why)
+    out = LammpsResult(version=lp.version(), load_start=os.getloadavg(), cap=mode.lammps_cap)
     log("lammps: two balls")
-    out["two_ball"] = two_ball()
-    out["accuracy"] = {}
+    out.two_ball = two_ball()
+    out.accuracy = {}
     for kind in LINES:
         log(f"lammps: accuracy, {kind} line, N = {mode.lammps_accuracy_n}")
-        out["accuracy"][kind] = accuracy(kind, mode.lammps_accuracy_n, mode.lammps_fractions,
-                                         mode.lammps_growth_n)
-    out["cost"] = [cost(kind, n, target, out["accuracy"][kind], procs, cap=mode.lammps_cap,
-                        fraction_seconds=mode.lammps_fraction_seconds)
-                   for kind, n, target in mode.lammps_cost]
-    out["load_end"] = os.getloadavg()
+        out.accuracy[kind] = accuracy(kind, mode.lammps_accuracy_n, mode.lammps_fractions,
+                                      mode.lammps_growth_n)
+    out.cost = [cost(kind, n, target, out.accuracy[kind], ctx.procs, cap=mode.lammps_cap,
+                     fraction_seconds=mode.lammps_fraction_seconds)
+                for kind, n, target in mode.lammps_cost]
+    out.load_end = os.getloadavg()
     return out
 
 
@@ -428,7 +449,7 @@ def report(res: dict) -> list[str]:
             row = ["LAMMPS", f"dt = t_c/{r['fraction']}", fmt_e(r["mid"]), fmt_e(r["end"]),
                    fmt_e(r["worst"])]
             for c in timed:
-                t = (c.get("lammps") or {}).get("at_fraction", {}).get(r["fraction"])
+                t = (c.get("lammps") or {}).get("at_fraction", {}).get(str(r["fraction"]))
                 row.append("-" if t is None else "~" + fmt_t(t))
             rows.append(row)
         for r in acc["chainrun"]:

@@ -1,8 +1,8 @@
 """How many contact events a random line needs to reach its terminal state.
 
 ``make bench``'s section ``general`` times the random line (masses and stiffnesses
-uniform in [1, 10), ``run.RANDOM_LINE``) against the paper's line. Its cost is set by its
-events: struck by one ball, the paper's line has N - 1 of them, the random line far
+uniform in [1, 10), ``harness.RANDOM_LINE``) against the paper's line. Its cost is set
+by its events: struck by one ball, the paper's line has N - 1 of them, the random line far
 more, as its fragments collide until their velocities are sorted. This counts them
 with chainrun and, for the smaller lines, with the tests' reference solver
 (``tests/reference.py``, scipy's DOP853 event by event, no code shared with the
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.run import RANDOM_LINE
+from benchmarks.harness import RANDOM_LINE, solve
 
 
 def random_line(n: int):
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     parser.add_argument("sizes", nargs="*", type=int, default=[30, 60, 120, 240])
     parser.add_argument("--reference-up-to", type=int, default=60)
     args = parser.parse_args(argv)
-    from chainrun.solver import load_kernels, simulate_line
+    from chainrun.solver import load_kernels
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from reference import reference_line
@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     for n in args.sizes:
         line = random_line(n)
         t0 = time.perf_counter()
-        events = simulate_line(line).diagnostics.events
+        events = solve(line).diagnostics.events
         t1 = time.perf_counter()
         ref, dt = "-", "-"
         if n <= args.reference_up_to:

@@ -56,9 +56,15 @@ def lines():
 
 
 def emit(out: str, rtol_factor: float) -> None:
-    """Run the lines with the chainrun on sys.path; save their results into ``out``."""
-    from chainrun.solver import DEFAULT_RTOL, load_kernels, simulate_line
+    """Run the lines with the chainrun on sys.path; save their results into ``out``.
 
+    That chainrun is this tree's or the other revision's, so its solver is called here
+    as that revision names it, not through ``harness.solve`` (this tree's entry point):
+    ``simulate_line(line, ...)`` where it has one, else ``simulate(line, ...)``."""
+    from chainrun import solver
+    from chainrun.solver import DEFAULT_RTOL, load_kernels
+
+    simulate_line = getattr(solver, "simulate_line", None) or solver.simulate
     load_kernels()
     saved = {}
     for i, (name, line) in enumerate(lines().items()):
@@ -95,14 +101,12 @@ def main(argv=None) -> int:
     if not args.against:
         parser.error("--against REVISION is required")
     sys.path.insert(0, str(ROOT))
-    from benchmarks.run import git
+    from benchmarks.worktree import checkout, git
 
     commit = git(ROOT, "rev-parse", "--verify", f"{args.against}^{{commit}}")
     with tempfile.TemporaryDirectory(prefix="chainrun-same-") as scratch:
         scratch = Path(scratch)
-        tree = scratch / "other"
-        git(ROOT, "worktree", "add", "--detach", str(tree), commit)
-        try:
+        with checkout(commit, scratch / "other") as tree:
             print(f"this tree ({ROOT})", file=sys.stderr)
             new = run_version(ROOT, scratch / "new.npz", None)
             print(f"{commit[:12]} (its first run compiles into its own cache)",
@@ -112,8 +116,6 @@ def main(argv=None) -> int:
             if args.spread:
                 print(f"{commit[:12]} at a tenth of the tolerance", file=sys.stderr)
                 fine = run_version(tree, scratch / "fine.npz", scratch / "numba", 0.1)
-        finally:
-            git(ROOT, "worktree", "remove", "--force", str(tree))
         print(f"this tree against {commit[:12]}:")
         head = f"{'line':18s} {'same bits':9s} {'steps new':>10s} {'steps old':>10s} " \
                f"{'max |dv|':>9s}"

@@ -15,24 +15,24 @@ import sys
 import numpy as np
 import pytest
 
-from benchmarks import run
+from benchmarks import harness, run, worktree
 from benchmarks.peers import rk4_paper, scipy_dop853
+from benchmarks.sections import general, peers, previous
 from chainrun.config import parse_experiment
-from chainrun.solver import simulate
 
 
 @pytest.fixture(scope="module")
 def hertz_line():
     n = 12
     t_stop = 1.25 * n + 20
-    return n, t_stop, simulate(n, 1, 1.5, t_end=t_stop, rtol=1e-14).final_velocity
+    return n, t_stop, harness.solve_paper(n, 1, 1.5, t_end=t_stop, rtol=1e-14).final_velocity
 
 
 def test_scipy_peer_agrees_with_chainrun(hertz_line):
     n, t_stop, v_ref = hertz_line
     r = scipy_dop853.solve(n, 1, 1.5, t_stop)
     assert r.t_end == t_stop
-    assert np.max(np.abs(r.final_velocity - v_ref)) < run.ACCURACY["scipy"]
+    assert np.max(np.abs(r.final_velocity - v_ref)) < harness.ACCURACY["scipy"]
     assert abs(r.final_velocity.sum() - 1.0) < 1e-12          # momentum
     assert r.events >= n - 1 - 2 and r.steps > 0
 
@@ -41,7 +41,7 @@ def test_rk4_peer_agrees_with_chainrun_to_its_accuracy(hertz_line):
     n, t_stop, v_ref = hertz_line
     r = rk4_paper.solve(n, 1, 1.5, t_stop)
     err = np.max(np.abs(r.final_velocity - v_ref))
-    assert err < run.ACCURACY["rk4"]
+    assert err < harness.ACCURACY["rk4"]
     assert abs(r.final_velocity.sum() - 1.0) < 1e-12
 
 
@@ -54,7 +54,7 @@ def test_heyoka_peer_agrees_with_chainrun(hertz_line):
 
     n, t_stop, v_ref = hertz_line
     r = heyoka_peer.solve(n, 1, 1.5, t_stop)
-    assert np.max(np.abs(r.final_velocity - v_ref)) < run.ACCURACY["heyoka"]
+    assert np.max(np.abs(r.final_velocity - v_ref)) < harness.ACCURACY["heyoka"]
     assert r.compile_time > 0
 
 
@@ -70,30 +70,30 @@ def test_a_missing_heyoka_leaves_its_peer_out_with_the_reason(monkeypatch):
     with pytest.raises(PeerUnavailable, match="heyoka is not installed"):
         heyoka_peer.solve(3, 1, 1.5, 5.0)
     notes: list[str] = []
-    runners = run._peer_runners(run.Mode(full=False), notes)
+    runners = peers.peer_runners(run.Mode(full=False), notes)
     assert set(runners) == {"scipy", "rk4"}
     assert notes == [f"heyoka skipped: {why}"]
-    result = run._run_peer("heyoka", heyoka_peer.solve, 3, 1, 1.5, 5.0)
+    result = peers.run_peer("heyoka", heyoka_peer.solve, 3, 1, 1.5, 5.0)
     assert result == {"tool": "heyoka", "n": 3, "error": why}
 
 
 def test_linear_peers_agree_with_chainrun():
     n = 10
-    ref = simulate(n, 1, 1.0, rtol=1e-14)
+    ref = harness.solve_paper(n, 1, 1.0, rtol=1e-14)
     for solve, claim in ((scipy_dop853.solve, "scipy"), (rk4_paper.solve, "rk4")):
         r = solve(n, 1, 1.0, ref.end_time)
-        assert np.max(np.abs(r.final_velocity - ref.final_velocity)) < run.ACCURACY[claim]
+        assert np.max(np.abs(r.final_velocity - ref.final_velocity)) < harness.ACCURACY[claim]
 
 
 def test_fit_exponent_recovers_a_power_law():
     ns = [100, 1000, 10_000, 100_000]
-    fit = run.fit_exponent(ns, [1e-3 * n**1.5 for n in ns])
+    fit = harness.fit_exponent(ns, [1e-3 * n**1.5 for n in ns])
     assert fit["exponent"] == pytest.approx(1.5)
     assert fit["local_exponent"] == pytest.approx(1.5)
     # start-up dominated points (under 0.05 s) are left out while two others remain
-    fit = run.fit_exponent(ns, [0.01, 0.01, 0.1, 1.0])
+    fit = harness.fit_exponent(ns, [0.01, 0.01, 0.1, 1.0])
     assert fit["exponent"] == pytest.approx(1.0) and fit["n_min"] == 10_000
-    assert run.fit_exponent([100], [1.0]) is None
+    assert harness.fit_exponent([100], [1.0]) is None
 
 
 def test_agreement_flags_a_disagreement():
@@ -101,9 +101,9 @@ def test_agreement_flags_a_disagreement():
     tools = [{"tool": "chainrun", "final_velocity": v, "error_vs_reference": 0.0},
              {"tool": "scipy", "final_velocity": v + 1e-12, "error_vs_reference": 1e-12},
              {"tool": "rk4", "final_velocity": v + 1e-7, "error_vs_reference": 1e-7}]
-    assert run.agreement(tools)["ok"]
+    assert peers.agreement(tools)["ok"]
     tools.append({"tool": "heyoka", "final_velocity": v + 1e-6, "error_vs_reference": 1e-6})
-    ag = run.agreement(tools)
+    ag = peers.agreement(tools)
     assert not ag["ok"]
     assert {(p["a"], p["b"]) for p in ag["pairs"] if not p["ok"]} == {
         ("chainrun", "heyoka"), ("scipy", "heyoka")}
@@ -111,7 +111,7 @@ def test_agreement_flags_a_disagreement():
 
 
 def test_generated_config_is_a_valid_experiment():
-    text = run.config_text("bench-x", 1000, 1, 1.5, t_end=1270.0,
+    text = harness.config_text("bench-x", 1000, 1, 1.5, t_end=1270.0,
                            times=np.linspace(0.0, 1270.0, 200))
     exp = parse_experiment(text, "toml")
     (spec,) = exp.runs()
@@ -138,12 +138,12 @@ def test_git_commit_is_read_without_git(tmp_path):
     _git(*env, "commit", "-q", "-m", "a", cwd=repo)
     head = _git("rev-parse", "HEAD", cwd=repo)
     assert re.fullmatch(r"[0-9a-f]{40}", head)
-    assert run.git_commit(repo) == head  # loose ref
+    assert harness.git_commit(repo) == head  # loose ref
     _git("pack-refs", "--all", cwd=repo)
-    assert run.git_commit(repo) == head  # packed ref
+    assert harness.git_commit(repo) == head  # packed ref
     _git("checkout", "-q", "--detach", cwd=repo)
-    assert run.git_commit(repo) == head  # detached
-    assert run.git_commit(tmp_path / "none") is None
+    assert harness.git_commit(repo) == head  # detached
+    assert harness.git_commit(tmp_path / "none") is None
 
 
 # --- the general and previous sections: configs, runs' order, verdicts, report ------------
@@ -152,18 +152,18 @@ def test_git_commit_is_read_without_git(tmp_path):
 def test_general_section_configs_are_the_lines_asked_for():
     """The random line: masses and stiffnesses in [1, 10) from fixed seeds (the same
     line in every bench); the steel line: SI units, Hertz, the paper line's events."""
-    (spec,) = parse_experiment(run.config_text("g", 500, 1, 1.5, chain=run.RANDOM_LINE),
+    (spec,) = parse_experiment(harness.config_text("g", 500, 1, 1.5, chain=harness.RANDOM_LINE),
                                "toml").runs()
     line = spec.line
     for a in (line.mass, line.stiffness):
         assert a.min() >= 1.0 and a.max() < 10.0 and a.max() / a.min() > 5
-    (again,) = parse_experiment(run.config_text("g", 500, 1, 1.5, chain=run.RANDOM_LINE),
+    (again,) = parse_experiment(harness.config_text("g", 500, 1, 1.5, chain=harness.RANDOM_LINE),
                                 "toml").runs()
     assert np.array_equal(again.line.mass, line.mass)
     assert not np.array_equal(line.mass, line.stiffness)
     assert spec.t_end is None and line.velocity[0] == 1.0 and not line.velocity[1:].any()
 
-    text = run.config_text("s", 100, 1, None, top={"units": "si"}, chain=run.SI_LINE)
+    text = harness.config_text("s", 100, 1, None, top={"units": "si"}, chain=harness.SI_LINE)
     (si,) = parse_experiment(text, "toml").runs()
     assert si.units == "si" and si.line.velocity[0] == 0.5
     assert np.allclose(si.line.alpha, 1.5) and si.t_end is None
@@ -179,24 +179,24 @@ class _FakeProcs:
             read_diagnostics=False):
         self.order.append(text)
         if len(self.order) == self.fail_at:
-            return run.ProcessRun(None, None, None, error="exit status 1: boom")
-        return run.ProcessRun(float(len(self.order)), 1.0, 10.0,
+            return harness.ProcessRun(None, None, None, error="exit status 1: boom")
+        return harness.ProcessRun(float(len(self.order)), 1.0, 10.0,
                               diagnostics={"events": 1} if read_diagnostics else None)
 
 
 def test_alternate_interleaves_the_runs_and_stops_at_a_failure():
     procs = _FakeProcs()
-    out = run.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
+    out = harness.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
     assert procs.order == ["A", "B"] * 3
     assert out["a"]["walls"] == [1.0, 3.0, 5.0] and out["b"]["walls"] == [2.0, 4.0, 6.0]
-    assert run._ratio(out["b"], out["a"]) == pytest.approx(4.0 / 3.0)
-    assert run._ratio(out["b"], out["a"], min) == 2.0
+    assert harness.ratio(out["b"], out["a"]) == pytest.approx(4.0 / 3.0)
+    assert harness.ratio(out["b"], out["a"], min) == 2.0
 
     procs = _FakeProcs(fail_at=4)
-    out = run.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
+    out = harness.alternate(procs, {"a": {"text": "A"}, "b": {"text": "B"}}, 3)
     assert procs.order == ["A", "B", "A", "B"]
     assert out["b"]["errors"] and out["b"]["walls"] == [2.0]
-    assert run._ratio(out["a"], {"walls": []}) is None
+    assert harness.ratio(out["a"], {"walls": []}) is None
 
 
 def _runs(walls, **diag):
@@ -206,12 +206,12 @@ def _runs(walls, **diag):
 def test_general_verdict_measured_predicted_or_not_at_all():
     uni = _runs([1.0, 1.2, 1.1])
     measured = {"n": 10**6, "uniform": uni, "random": _runs([2.0]), "ratio": 2.0 / 1.1}
-    assert run._general_verdict(measured) == {"n": 10**6, "ratio": 2.0 / 1.1,
+    assert general.verdict(measured) == {"n": 10**6, "ratio": 2.0 / 1.1,
                                               "measured": True, "met": True}
     predicted = {"n": 10**6, "uniform": uni, "ratio": None, "random_predicted": 11.0}
-    v = run._general_verdict(predicted)
+    v = general.verdict(predicted)
     assert not v["measured"] and v["ratio"] == pytest.approx(10.0) and v["met"] is False
-    assert run._general_verdict({"n": 5, "uniform": uni, "ratio": None})["met"] is None
+    assert general.verdict({"n": 5, "uniform": uni, "ratio": None})["met"] is None
 
 
 def _general_result():
@@ -223,11 +223,11 @@ def _general_result():
               {"n": 10**6, "uniform": _runs([7.4, 7.6, 7.5], **diag),
                "random_skipped": "predicted solver time 1e+07 s > 60 s (--full for more)",
                "random_predicted": 7.5e6, "ratio": None}]
-    units = {"n": 10**5, "si_line": run.SI_LINE, "paper": _runs([0.95, 0.97, 0.96], **diag),
+    units = {"n": 10**5, "si_line": harness.SI_LINE, "paper": _runs([0.95, 0.97, 0.96], **diag),
              "si": _runs([0.96, 0.94, 0.98], **diag), "ratio": 1.0, "same_work": True}
-    g = {"random_line": run.RANDOM_LINE, "limit": 2.0, "requirement_n": 10**6, "runs": 3,
+    g = {"random_line": harness.RANDOM_LINE, "limit": 2.0, "requirement_n": 10**6, "runs": 3,
          "series": series, "units": units}
-    g["requirement"] = run._general_verdict(series[-1])
+    g["requirement"] = general.verdict(series[-1])
     return g
 
 
@@ -242,11 +242,12 @@ def _previous_result():
 
 
 def test_report_shows_the_general_and_previous_sections():
-    res = {"machine": {"machine": "x86_64", "cpus": 2, "memory_gb": 24}, "full": False,
-           "date": "2026-11-24T08:00:00", "git_commit": "c" * 40, "load_start": (1.0,),
-           "load_end": (1.0,), "notes": [], "total_time": 1.0, "json": "b.json",
-           "general": _general_result(), "previous": _previous_result()}
-    text = run.report(res)
+    meta = {"machine": {"machine": "x86_64", "cpus": 2, "memory_gb": 24}, "mode": "default",
+            "date": "2026-11-24T08:00:00", "git_commit": "c" * 40, "load_start": (1.0,),
+            "load_end": (1.0,), "total_time": 1.0, "json": "b.json"}
+    done = {"general": general.GeneralResult(**_general_result()),
+            "previous": previous.PreviousResult(**_previous_result())}
+    text = run.report(meta, done, [])
     # every time is printed, with the medians and the ratio to the paper's line
     assert "0.72, 0.73, 0.71" in text and "2.27, 2.23, 2.25" in text
     assert re.search(r"random\s+2\.27, 2\.23, 2\.25\s+2\.25\s+3\.12\s+24259\s+125799", text)
@@ -263,10 +264,10 @@ def test_report_shows_the_general_and_previous_sections():
     measured = _general_result()
     last = measured["series"][-1]
     last.update(random=_runs([9.0, 9.5, 9.2]), ratio=9.2 / 7.5)
-    measured["requirement"] = run._general_verdict(last)
+    measured["requirement"] = general.verdict(last)
     assert any(line.endswith("MET (1.23 x)") and "NOT" not in line
-               for line in run.report_general(measured))
-    assert run.report_previous({"cases": [], "error": "cannot resolve"}) == [
+               for line in general.GeneralResult(**measured).lines())
+    assert previous.PreviousResult(cases=[], error="cannot resolve").lines() == [
         "Previous version: cannot resolve"]
 
 
@@ -290,19 +291,19 @@ def solver_history(tmp_path):
 
 def test_previous_version_is_the_solver_before_its_latest_change(solver_history):
     repo, (c0, c1, c2) = solver_history
-    got = run.resolve_against(None, repo, environ={})
+    got = worktree.resolve_against(None, repo, environ={})
     assert got["commit"] == c0 and got["subject"] == "change 0"
     assert got["why"].startswith(f"{c1[:12]}^") and "change 1" in got["why"]
     # named: by the option, else the environment variable
-    assert run.resolve_against("HEAD~1", repo, environ={})["commit"] == c1
-    env = {run.AGAINST_ENV: "HEAD"}
-    assert run.resolve_against(None, repo, environ=env)["commit"] == c2
-    assert run.resolve_against("HEAD~2", repo, environ=env)["commit"] == c0
+    assert worktree.resolve_against("HEAD~1", repo, environ={})["commit"] == c1
+    env = {worktree.AGAINST_ENV: "HEAD"}
+    assert worktree.resolve_against(None, repo, environ=env)["commit"] == c2
+    assert worktree.resolve_against("HEAD~2", repo, environ=env)["commit"] == c0
     with pytest.raises(ValueError, match="no-such-rev"):
-        run.resolve_against("no-such-rev", repo, environ={})
+        worktree.resolve_against("no-such-rev", repo, environ={})
     # uncommitted solver changes: this version is the work tree, the previous one HEAD
     (repo / "chainrun" / "solver" / "a.py").write_text("new")
-    got = run.resolve_against(None, repo, environ={})
+    got = worktree.resolve_against(None, repo, environ={})
     assert got["commit"] == c2 and "uncommitted" in got["why"]
 
 
@@ -316,7 +317,7 @@ def test_previous_version_needs_a_parent(tmp_path):
     _git("add", ".", cwd=repo)
     _git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "0", cwd=repo)
     with pytest.raises(ValueError, match="no parent"):
-        run.resolve_against(None, repo, environ={})
+        worktree.resolve_against(None, repo, environ={})
     other = tmp_path / "other"                               # no solver history at all
     other.mkdir()
     _git("init", "-q", cwd=other)
@@ -324,4 +325,121 @@ def test_previous_version_needs_a_parent(tmp_path):
     _git("add", ".", cwd=other)
     _git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "0", cwd=other)
     with pytest.raises(ValueError, match="no commit changed"):
-        run.resolve_against(None, other, environ={})
+        worktree.resolve_against(None, other, environ={})
+
+
+# --- the results file, and the numbers README.md quotes from it -------------------------
+
+
+def test_readme_quotes_the_results_file():
+    """README.md's measured numbers are the block the bench writes from
+    benchmarks/results.json, and results.md is that file rendered: neither can drift
+    from what was measured."""
+    from benchmarks import results
+
+    data = results.load()
+    assert {"peers", "targets", "compile"} <= set(data["sections"])
+    text = results.README.read_text()
+    assert text.count(results.BEGIN) == 1 and text.count(results.END) == 1
+    assert results.readme_text(text, data) == text
+    assert results.markdown_path(results.RESULTS).read_text() == results.render(data)
+
+
+def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
+    from benchmarks import results
+    from benchmarks.sections.compilation import CompileResult
+    from benchmarks.sections.targets import Target, TargetsResult
+
+    meta = {"git_commit": "c" * 40, "mode": "default",
+            "machine": {"cpu": "x", "machine": "x86_64", "cpus": 2, "memory_gb": 24},
+            "versions": {"chainrun": "0"}}
+    path = tmp_path / "results.json"
+
+    def put(name, result):
+        return results.update(path, name, results.entry(
+            result, meta=meta, date="2026-11-24T08:00:00", load_start=(1.5, 1, 1),
+            load_end=(2.5, 1, 1), wall=3.0, notes=["a note"]))
+
+    targets = TargetsResult([Target("Hertz", 10**6, 1.5, 10.0, walls=[7.5, 8.0, 7.9],
+                                    cpus=[7.0, 7.1, 7.2], runs_within_limit=3, met=True)])
+    put("targets", targets)
+    put("compile", CompileResult(cold_wall=80.0, warm_wall=0.7, compile_wall=79.3,
+                                 compile_cpu=78.0, numba_floor=[0.5, 0.6]))
+    data = put("targets", TargetsResult([Target("linear", 10**5, 1.0, 30.0, walls=[3.0])]))
+    assert list(data["sections"]) == ["compile", "targets"]       # the sections' order
+    assert results.result_of(data, "targets").targets[0].label == "linear"
+    assert results.result_of(data, "compile").compile_wall == 79.3
+    # a result read back renders as it did when measured
+    load = results.load(path)
+    measured = CompileResult(cold_wall=80.0, warm_wall=0.7, compile_wall=79.3,
+                             compile_cpu=78.0, numba_floor=[0.5, 0.6])
+    assert results.result_of(load, "compile").lines() == measured.lines()
+    md = results.markdown_path(path).read_text()
+    assert md == results.render(load)
+    assert "load average 1.5 at the start, 2.5 at the end" in md and "Note: a note" in md
+    block = " ".join(results.readme_block(load).split())
+    assert "a linear line of 10^5 balls 3.00 s" in block
+    assert "compiles the solver in 79 s" in block and "0.50-0.60 s" in block
+    assert "load average 1.5 to 2.5" in block
+
+
+def test_the_solver_is_called_in_one_place():
+    """Every benchmark runs chainrun's solver through ``harness.solve``: a change of
+    the solver's entry point is adapted there. ``same_answers`` calls the solver of
+    whichever revision it runs in, by that revision's name for it."""
+    import ast
+    from pathlib import Path
+
+    root = Path(harness.__file__).resolve().parents[1]
+    files = sorted((root / "benchmarks").rglob("*.py"))
+    files += [root / "tests" / "integration" / "test_benchmarks.py",
+              root / "tests" / "integration" / "test_lammps_peer.py"]
+    allowed = {root / "benchmarks" / "harness.py", root / "benchmarks" / "same_answers.py"}
+    calling = set()
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
+                    "chainrun.solver") and {"simulate", "simulate_line"}
+                    & {a.name for a in node.names}):
+                calling.add(path)
+            elif isinstance(node, ast.Attribute) and node.attr == "simulate_line":
+                calling.add(path)
+    assert calling <= allowed, sorted(str(p.relative_to(root)) for p in calling - allowed)
+    assert root / "benchmarks" / "harness.py" in calling
+
+
+def test_the_harness_imports_run_one_way():
+    """peers <- harness <- worktree <- sections <- results <- run: a section imports
+    the shared helpers and no part above it, and the helpers import no section."""
+    import ast
+    from pathlib import Path
+
+    root = Path(harness.__file__).resolve().parents[1]
+    rank = {"benchmarks.peers": 0, "benchmarks.harness": 1, "benchmarks.worktree": 2,
+            "benchmarks.sections": 3, "benchmarks.against_lammps": 3,
+            "benchmarks.results": 4, "benchmarks.run": 5}
+
+    def part(name):
+        while name and name not in rank:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    wrong = []
+    for path in sorted((root / "benchmarks").rglob("*.py")):
+        rel = path.relative_to(root).with_suffix("")
+        name = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+        src = part(name)
+        if src is None:
+            continue                                    # a script of its own
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                targets = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                continue
+            for target in targets:
+                dst = part(target)
+                if dst is not None and dst != src and rank[dst] > rank[src]:
+                    wrong.append((name, target))
+    assert not wrong, wrong

@@ -176,7 +176,7 @@ def test_lines_are_the_same_for_chainrun_and_lammps():
 
 
 def test_timed_lines_are_chainrun_experiments_at_an_rtol():
-    from benchmarks.run import config_text
+    from benchmarks.harness import config_text
     from chainrun.config import parse_experiment
 
     text = config_text("x", 30, 1, None, top={"units": "si"}, chain=al.LINES["damped"],
@@ -202,14 +202,14 @@ def test_lammps_two_balls_agree_with_chainrun(kind):
     """At dt = t_c/2000, LAMMPS's velocities inside and after a collision of two balls
     are chainrun's (the same law) to its step's error."""
     _have_lammps()
-    from chainrun.solver import simulate_line
+    from benchmarks.harness import solve
 
     line, spheres, t_c, _ = al.lines(kind, 2)
     steps = 2000
     dt = t_c / steps
     marks = (steps // 4, 3 * steps // 2)
     r = lp.run(spheres, dt, marks, contact=kind == "elastic")
-    ref = simulate_line(line, [m * dt for m in marks], rtol=1e-14).velocities
+    ref = solve(line, [m * dt for m in marks], rtol=1e-14).velocities
     v0 = 0.5
     tol = 1e-7 if kind == "elastic" else 5e-5          # second order, first order
     assert np.max(np.abs(r.velocities[marks[0]] - ref[0])) < tol * v0 * 10
