@@ -12,15 +12,15 @@ import sys
 
 import numpy as np
 
-from chainrun.solver import simulate
+from chainrun.solver import Line, simulate
 
 
 def main(sizes: list[int]) -> None:
     print(f"{'N':>8}  {'rtol':>7}  {'max |dv|':>9}  {'ball':>7}  {'|dE|/E':>8}  {'steps/ball':>10}")
     for n in sizes:
-        ref = simulate(n, 1, 1.5, rtol=1e-14)
+        ref = simulate(Line.paper(n, 1, 1.5), rtol=1e-14)
         for rtol in (1e-12, 1e-13):
-            sol = simulate(n, 1, 1.5, rtol=rtol)
+            sol = simulate(Line.paper(n, 1, 1.5), rtol=rtol)
             d = np.abs(sol.final_velocity - ref.final_velocity)
             print(f"{n:>8}  {rtol:>7.0e}  {d.max():>9.2e}  {d.argmax() + 1:>7}  "
                   f"{sol.diagnostics.energy_error:>8.1e}  {sol.diagnostics.steps / n:>10.1f}",

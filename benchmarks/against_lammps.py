@@ -108,15 +108,15 @@ def grid(t_end: float, t_mid: float, t_c: float, fraction: float) -> tuple[float
 
 def _chainrun_at(line, times, rtol=REFERENCE_RTOL) -> np.ndarray:
     """chainrun's velocities at ``times`` (the last is the end), shape (T, N)."""
-    from chainrun.solver import simulate_line
+    from chainrun.solver import simulate
 
-    return simulate_line(line, times, t_end=times[-1], rtol=rtol).velocities
+    return simulate(line, times, t_end=times[-1], rtol=rtol).velocities
 
 
 def _terminal_time(line, rtol=REFERENCE_RTOL) -> float:
-    from chainrun.solver import simulate_line
+    from chainrun.solver import simulate
 
-    sol = simulate_line(line, rtol=rtol)
+    sol = simulate(line, rtol=rtol)
     if not sol.terminal:
         raise RuntimeError(f"chainrun did not reach the terminal state: {sol.message}")
     return sol.end_time
@@ -127,14 +127,14 @@ def _terminal_time(line, rtol=REFERENCE_RTOL) -> float:
 
 def two_ball() -> dict:
     """The Hertz law and the restitution of two balls, LAMMPS against chainrun."""
-    from chainrun.solver import EventKind, simulate_line
+    from chainrun.solver import EventKind, simulate
 
     out = {}
     line, spheres, t_c, same = lines("elastic", 2)
     v0 = float(line.velocity[0])
     dt = t_c / TWO_BALL_FRACTION
     marks = (TWO_BALL_FRACTION // 4, 3 * TWO_BALL_FRACTION // 2)
-    sol = simulate_line(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
+    sol = simulate(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
     opened = sol.event_time[sol.event_kind == EventKind.OPEN]
     r = lp.run(spheres, dt, marks, contact=True)
     v = r.velocities[marks[-1]]
@@ -147,7 +147,7 @@ def two_ball() -> dict:
         "end_diff": float(np.max(np.abs(v - sol.velocities[-1])))}
 
     line, matched, _, _ = lines("damped", 2)
-    sol = simulate_line(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
+    sol = simulate(line, [m * dt for m in marks], rtol=REFERENCE_RTOL)
     out["chainrun_damped"] = float((sol.velocities[-1, 1] - sol.velocities[-1, 0]) / v0)
     settings = []
     for damping, e, limit in (("tsuji", 0.9, False), ("tsuji", 0.9, True),

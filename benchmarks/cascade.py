@@ -44,7 +44,7 @@ def main(argv=None) -> int:
     parser.add_argument("--random", action="store_true",
                         help="the bench's random masses and stiffnesses, K = 1")
     args = parser.parse_args(argv)
-    from chainrun.solver import DEFAULT_RTOL, Line, load_kernels, simulate_line
+    from chainrun.solver import DEFAULT_RTOL, Line, load_kernels, simulate
 
     from benchmarks.random_events import random_line
 
@@ -69,7 +69,7 @@ def main(argv=None) -> int:
                      ("integrated", dict(rtol=rtol, closed_form=False)),
                      ("integrated, rtol/10", dict(rtol=rtol / 10, closed_form=False))):
         t0 = time.perf_counter()
-        sol = simulate_line(line, **kw)
+        sol = simulate(line, **kw)
         dt = time.perf_counter() - t0
         d = sol.diagnostics
         runs[name] = sol.final_velocity

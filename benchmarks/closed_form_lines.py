@@ -48,7 +48,7 @@ def main(argv=None) -> int:
     parser.add_argument("--damped", action="store_true")
     parser.add_argument("--show", type=int, default=12, help="lines of the table")
     args = parser.parse_args(argv)
-    from chainrun.solver import load_kernels, simulate_line
+    from chainrun.solver import load_kernels, simulate
 
     load_kernels()
     rng = np.random.default_rng(args.seed)
@@ -67,8 +67,8 @@ def main(argv=None) -> int:
                     raise TimeoutError("no progress in 60 s")
 
             try:
-                sol = simulate_line(line, times, t_end=t_end, closed_form=closed_form,
-                                    on_progress=deadline)
+                sol = simulate(line, times, t_end=t_end, closed_form=closed_form,
+                               on_progress=deadline)
             except TimeoutError as e:
                 print(f"draw {draw}, closed_form={closed_form}: {e}")
                 bad += 1

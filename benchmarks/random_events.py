@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     parser.add_argument("sizes", nargs="*", type=int, default=[30, 60, 120, 240])
     parser.add_argument("--reference-up-to", type=int, default=60)
     args = parser.parse_args(argv)
-    from chainrun.solver import load_kernels, simulate_line
+    from chainrun.solver import load_kernels, simulate
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from reference import reference_line
@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     for n in args.sizes:
         line = random_line(n)
         t0 = time.perf_counter()
-        events = simulate_line(line).diagnostics.events
+        events = simulate(line).diagnostics.events
         t1 = time.perf_counter()
         ref, dt = "-", "-"
         if n <= args.reference_up_to:

@@ -444,7 +444,7 @@ class Processes:
 
 def simulate_until(n, k, alpha, *, t_end=None, rtol=None, timeout=None, times=()):
     """``chainrun.solver.simulate``, abandoned (``Deadline``) after ``timeout`` seconds."""
-    from chainrun.solver import DEFAULT_RTOL, simulate
+    from chainrun.solver import DEFAULT_RTOL, Line, simulate
 
     start = time.perf_counter()
     last_t = [0.0]
@@ -454,7 +454,7 @@ def simulate_until(n, k, alpha, *, t_end=None, rtol=None, timeout=None, times=()
         if timeout is not None and time.perf_counter() - start > timeout:
             raise Deadline(f"not finished after {timeout:.0f} s (reached t = {t:.4g})")
 
-    return simulate(n, k, alpha, times, t_end=t_end,
+    return simulate(Line.paper(n, k, alpha), times, t_end=t_end,
                     rtol=DEFAULT_RTOL if rtol is None else rtol, on_progress=progress)
 
 

@@ -57,13 +57,13 @@ def lines():
 
 def emit(out: str, rtol_factor: float) -> None:
     """Run the lines with the chainrun on sys.path; save their results into ``out``."""
-    from chainrun.solver import DEFAULT_RTOL, load_kernels, simulate_line
+    from chainrun.solver import DEFAULT_RTOL, load_kernels, simulate
 
     load_kernels()
     saved = {}
     for i, (name, line) in enumerate(lines().items()):
         t = time.perf_counter()
-        sol = simulate_line(line, times=TIMES, rtol=DEFAULT_RTOL * rtol_factor)
+        sol = simulate(line, times=TIMES, rtol=DEFAULT_RTOL * rtol_factor)
         print(f"  {name}: {time.perf_counter() - t:.2f} s", file=sys.stderr, flush=True)
         saved[f"{i}_v"] = sol.final_velocity
         saved[f"{i}_t"] = sol.event_time

@@ -18,14 +18,15 @@ import pytest
 from benchmarks import run
 from benchmarks.peers import rk4_paper, scipy_dop853
 from chainrun.config import parse_experiment
-from chainrun.solver import simulate
+from chainrun.solver import Line, simulate
 
 
 @pytest.fixture(scope="module")
 def hertz_line():
     n = 12
     t_stop = 1.25 * n + 20
-    return n, t_stop, simulate(n, 1, 1.5, t_end=t_stop, rtol=1e-14).final_velocity
+    return n, t_stop, simulate(Line.paper(n, 1, 1.5), t_end=t_stop,
+                               rtol=1e-14).final_velocity
 
 
 def test_scipy_peer_agrees_with_chainrun(hertz_line):
@@ -79,7 +80,7 @@ def test_a_missing_heyoka_leaves_its_peer_out_with_the_reason(monkeypatch):
 
 def test_linear_peers_agree_with_chainrun():
     n = 10
-    ref = simulate(n, 1, 1.0, rtol=1e-14)
+    ref = simulate(Line.paper(n, 1, 1.0), rtol=1e-14)
     for solve, claim in ((scipy_dop853.solve, "scipy"), (rk4_paper.solve, "rk4")):
         r = solve(n, 1, 1.0, ref.end_time)
         assert np.max(np.abs(r.final_velocity - ref.final_velocity)) < run.ACCURACY[claim]

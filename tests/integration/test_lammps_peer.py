@@ -202,14 +202,14 @@ def test_lammps_two_balls_agree_with_chainrun(kind):
     """At dt = t_c/2000, LAMMPS's velocities inside and after a collision of two balls
     are chainrun's (the same law) to its step's error."""
     _have_lammps()
-    from chainrun.solver import simulate_line
+    from chainrun.solver import simulate
 
     line, spheres, t_c, _ = al.lines(kind, 2)
     steps = 2000
     dt = t_c / steps
     marks = (steps // 4, 3 * steps // 2)
     r = lp.run(spheres, dt, marks, contact=kind == "elastic")
-    ref = simulate_line(line, [m * dt for m in marks], rtol=1e-14).velocities
+    ref = simulate(line, [m * dt for m in marks], rtol=1e-14).velocities
     v0 = 0.5
     tol = 1e-7 if kind == "elastic" else 5e-5          # second order, first order
     assert np.max(np.abs(r.velocities[marks[0]] - ref[0])) < tol * v0 * 10
