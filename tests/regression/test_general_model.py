@@ -23,7 +23,7 @@ from closed_forms import (
     steel_bead,
     two_ball_velocities,
 )
-from reference import FAMILIES, line_energy, random_line, reference_line, reference_solve
+from reference import FAMILIES, line_energy, paper_line, random_line, reference_line
 
 #: One table of tolerances for this file. Lines here have speeds, masses and
 #: durations of order 1 (the SI chain is compared in its own units), so the
@@ -418,7 +418,7 @@ def test_steel_chain_in_si_units(n):
     np.testing.assert_allclose(sol.final_position, paper.final_position * u * t_unit,
                                rtol=0, atol=TOL["si"] * u * t_unit * (1 + paper.end_time))
     if n <= 10:   # and the reference, for chainrun's paper run
-        r = reference_solve(n, 1, 1.5)
+        r = reference_line(paper_line(n, 1, 1.5))
         np.testing.assert_allclose(sol.final_velocity, u * r.final_velocity, rtol=0,
                                    atol=TOL["reference_velocity"] * u)
 

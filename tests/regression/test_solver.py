@@ -21,7 +21,7 @@ from chainrun.solver import EventKind, Line, Outcome, simulate
 from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
-from reference import reference_solve
+from reference import paper_line, reference_line
 
 #: One table of tolerances for this file.
 TOL = {
@@ -52,7 +52,7 @@ def run(n: int, k: int, alpha: float):
 @functools.lru_cache(maxsize=None)
 def ref(n: int, k: int, alpha: float):
     """Cached reference run."""
-    return reference_solve(n, k, alpha)
+    return reference_line(paper_line(n, k, alpha))
 
 
 def assert_terminal(sol):
