@@ -214,7 +214,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     from the runs can be computed from both.
     """
     from chainrun.limits import check_memory
-    from chainrun.solver import load_kernels, simulate_line, velocity_floor
+    from chainrun.solver import load_kernels, simulate, velocity_floor
     from chainrun.store import RunWriter
 
     check_memory(spec.n, len(spec.times), damped=spec.damped, samples=spec.sensor_samples)
@@ -224,7 +224,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     path = run_file(Path(outdir), spec)
     hook = None if on_progress is None else (lambda t: on_progress(spec.run_id, t))
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
-        sol = simulate_line(
+        sol = simulate(
             line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
             max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
             sensors=spec.sensors, sensor_dt=spec.sensor_dt, sensor_end=spec.sensor_end,
@@ -253,21 +253,21 @@ def _check(spec: RunSpec, line, sol, check_outdir, hook) -> Check:
     them on its dense output), so a check run without them, as one with a
     ``check_outdir``, follows the trajectory it would with them.
     """
-    from chainrun.solver import simulate_line, velocity_floor
+    from chainrun.solver import simulate, velocity_floor
     from chainrun.store import RunWriter
 
     checked = spec.for_check()
     args = dict(t_end=checked.t_end, rtol=checked.rtol, max_events=checked.max_events,
                 on_progress=hook)
     if check_outdir is None:
-        other = simulate_line(line, **args)
+        other = simulate(line, **args)
     else:
         Path(check_outdir).mkdir(parents=True, exist_ok=True)
         with RunWriter(run_file(Path(check_outdir), checked), checked,
                        velocity_floor=velocity_floor(checked.rtol)) as writer:
-            other = simulate_line(line, checked.times, on_snapshot=writer.snapshot,
-                                  sensors=checked.sensors, sensor_dt=checked.sensor_dt,
-                                  sensor_end=checked.sensor_end, **args)
+            other = simulate(line, checked.times, on_snapshot=writer.snapshot,
+                             sensors=checked.sensors, sensor_dt=checked.sensor_dt,
+                             sensor_end=checked.sensor_end, **args)
             writer.finish(other)
     return Check.between(sol, other, checked.rtol)
 

@@ -1,19 +1,21 @@
 """A slow, independent reference solver for short lines of balls (test-only).
 
 This module owns the test suite's second opinion on the dynamics. It shares no code
-with ``chainrun.solver``: it integrates, in paper units,
+with ``chainrun.solver``: ``reference_line`` integrates a line of balls given as a
+``chainrun.solver.model.Line``, or any record of the same arrays (read for its input
+only). The paper's line, ``paper_line(n, k, alpha)``, is, in paper units,
 
     x_n'' = (x_{n-1} - x_n)_+^alpha - (x_n - x_{n+1})_+^alpha,
-    x_n(0) = 0,  x_n'(0) = 1 for n <= K, 0 otherwise,
+    x_n(0) = 0,  x_n'(0) = 1 for n <= K, 0 otherwise;
 
-with scipy's order-8 Dormand-Prince pair (``scipy.integrate.DOP853``, the method behind
+the method is described on it first, then for the general line (masses, stiffnesses,
+exponents, gaps, positions, forces, walls, damping; section below). It steps with
+scipy's order-8 Dormand-Prince pair (``scipy.integrate.DOP853``, the method behind
 ``solve_ivp(method="DOP853")``), event by event. (chainrun's kernels borrow the same
 DOP853 coefficients; the stepping, event logic and bookkeeping here are separate, and
 this solver is checked on its own against closed forms, Table 1 and exact symmetries
-in ``tests/regression/test_reference_solver.py``.) ``reference_line`` extends it to the
-general line of ``chainrun.solver.model`` (masses, stiffnesses, exponents, gaps,
-positions, forces, walls; section below, tested in
-``tests/regression/test_reference_general.py``), and ``random_line`` draws the short
+in ``tests/regression/test_reference_solver.py`` and
+``tests/regression/test_reference_general.py``.) ``random_line`` draws the short
 general lines the tests compare on.
 
 Method
@@ -76,8 +78,7 @@ with the same method as above, generalised:
   compressions are of order 1 (``reference_units``: the median mass, the contact of
   median stiffness, the largest initial speed, or for a line at rest the speed its
   loads give), so that ``FLOOR``, ``atol`` and ``rtol`` mean there what they mean
-  in paper units; results are converted back. The paper's line is its own unit: on
-  it ``reference_line`` does exactly what ``reference_solve`` does.
+  in paper units; results are converted back. The paper's line is its own unit.
 * Initially a contact is active if compressed, or touching (to 1e-13) and not
   parting: neither moving apart nor, touching at rest, pulled apart by the forces. When every active contact touches without load, without moving and
   without being pressed (none, a line moving as one body, or a line at rest ahead of
@@ -142,7 +143,7 @@ import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 from scipy.optimize import brentq
 
-__all__ = ["RefSolution", "reference_solve", "REF_RTOL", "REF_ATOL", "FLOOR", "OPEN", "CLOSE",
+__all__ = ["REF_RTOL", "REF_ATOL", "FLOOR", "OPEN", "CLOSE", "PaperLine", "paper_line",
            "RefLineSolution", "reference_line", "reference_units", "line_energy",
            "random_line", "FAMILIES"]
 
@@ -159,67 +160,49 @@ CLOSE = 1
 
 
 @dataclass(frozen=True)
-class RefSolution:
-    """Result of one reference run.
+class PaperLine:
+    """The paper's line as ``reference_line`` reads a line (``paper_line``): unit
+    masses and stiffnesses, one exponent, no gap, force, damping or wall."""
 
-    Attributes
-    ----------
-    n, k : int
-    alpha : float
-    terminal : bool
-        Whether the terminal state was reached before ``t_max``.
-    end_time : float
-        Time of the last event (the terminal time), or ``t_max``.
-    final_position, final_velocity : ndarray, shape (N,)
-        State at ``end_time``.
-    event_time : ndarray, shape (E,)
-    event_contact : ndarray of int64, shape (E,)
-        Contact j joins balls j and j+1 (0-based).
-    event_kind : ndarray of int8, shape (E,)
-        ``OPEN`` (-1) or ``CLOSE`` (+1).
-    event_compression : ndarray, shape (E,)
-        The contact's compression at the event (zero to rounding).
-    separation_time, separation_velocity : ndarray, shape (N,)
-        Time and velocity at which each ball last lost its last contact; NaN if it
-        never did.
-    steps : int
-        Accepted integration steps (first pass).
-    """
-
-    n: int
-    k: int
     alpha: float
-    terminal: bool
-    end_time: float
-    final_position: np.ndarray
-    final_velocity: np.ndarray
-    event_time: np.ndarray
-    event_contact: np.ndarray
-    event_kind: np.ndarray
-    event_compression: np.ndarray
-    separation_time: np.ndarray
-    separation_velocity: np.ndarray
-    steps: int
+    velocity: np.ndarray
+    position: np.ndarray
+    left = None
+    right = None
+
+    @property
+    def n(self) -> int:
+        return self.velocity.size
+
+    @property
+    def mass(self):
+        return np.ones(self.n)
+
+    @property
+    def stiffness(self):
+        return np.ones(self.n - 1)
+
+    @property
+    def gap(self):
+        return np.zeros(self.n - 1)
+
+    @property
+    def force(self):
+        return np.zeros(self.n)
 
 
-def _make_rhs(n: int, alpha: float, active: np.ndarray):
-    """Right-hand side for a fixed active set; y = (x (N), v (N))."""
-    mask = active.astype(float)
-    linear = alpha == 1.0
-
-    def rhs(t, y):
-        x = y[:n]
-        c = x[:-1] - x[1:]
-        if linear:
-            f = c * mask
-        else:
-            f = np.sign(c) * np.abs(c) ** alpha * mask
-        a = np.zeros(n)
-        a[1:] += f
-        a[:-1] -= f
-        return np.concatenate((y[n:], a))
-
-    return rhs
+def paper_line(n: int, k: int, alpha: float, *, initial=None) -> PaperLine:
+    """The paper's line of ``n`` balls touching at rest, the first ``k`` struck at
+    velocity 1; or, with ``initial = (x0, v0)`` (each of shape (N,)), its balls
+    displaced by x0 and moving at v0 (``k`` is then unused)."""
+    if n < 1 or not 1 <= k <= n:
+        raise ValueError(f"need n >= 1 and 1 <= k <= n, got n={n}, k={k}")
+    if initial is None:
+        v = np.zeros(n)
+        v[:k] = 1.0
+        return PaperLine(float(alpha), v, np.zeros(n))
+    x0, v0 = (np.array(a, dtype=float) for a in initial)
+    return PaperLine(float(alpha), v0, x0)
 
 
 def _integrate_to(rhs, t0, y0, t1, rtol, atol):
@@ -231,172 +214,6 @@ def _integrate_to(rhs, t0, y0, t1, rtol, atol):
     if sol.status != 0:
         raise RuntimeError(f"reference integration failed at t={t0}: {sol.message}")
     return sol.y[:, -1]
-
-
-def reference_solve(n: int, k: int, alpha: float, *, rtol: float = REF_RTOL,
-                    atol: float = REF_ATOL, t_max: float = 1e8,
-                    max_events: int = 100_000, initial=None) -> RefSolution:
-    """Run a line of ``n`` balls, the first ``k`` struck at velocity 1, to its terminal state.
-
-    Parameters
-    ----------
-    n : int
-        Number of balls, >= 1 (meant for n <= 8).
-    k : int
-        Number of impacting balls, 1 <= k <= n.
-    alpha : float
-        Contact exponent, >= 1.
-    rtol, atol : float
-        Tolerances of the DOP853 steps (on positions and velocities alike).
-    t_max : float
-        Give up (``terminal=False``) past this time.
-    max_events : int
-        Safety limit on the number of contact events.
-    initial : (ndarray, ndarray), optional
-        ``(x0, v0)``, each of shape (N,), to start from another state (``k`` is then
-        only recorded). A contact is active initially if compressed, or touching
-        and closing faster than ``FLOOR``.
-
-    Returns
-    -------
-    RefSolution
-    """
-    if n < 1 or not 1 <= k <= n:
-        raise ValueError(f"need n >= 1 and 1 <= k <= n, got n={n}, k={k}")
-    alpha = float(alpha)
-    t = 0.0
-    m = n - 1
-    if initial is None:
-        x = np.zeros(n)
-        v = np.zeros(n)
-        v[:k] = 1.0
-        active = np.full(m, k < n)    # one cluster touching at zero compression
-    else:
-        x = np.array(initial[0], dtype=float)
-        v = np.array(initial[1], dtype=float)
-        c = x[:-1] - x[1:]
-        active = (c > 0) | ((c == 0) & (v[:-1] - v[1:] > FLOOR))
-    events: list[tuple[float, int, int]] = []
-    sep_t = np.full(n, np.nan)
-    sep_v = np.full(n, np.nan)
-    steps = 0
-
-    def switch(j: int, kind: int, tj: float, pos: np.ndarray, vel: np.ndarray) -> None:
-        events.append((tj, j, kind, pos[j] - pos[j + 1]))
-        active[j] = kind == CLOSE
-        if kind == OPEN:
-            for b in (j, j + 1):
-                left = b > 0 and active[b - 1]
-                right = b < m and active[b]
-                if not (left or right):
-                    sep_t[b] = tj
-                    sep_v[b] = vel[b]
-
-    def restart_consistency(tj: float, xx: np.ndarray, vv: np.ndarray) -> None:
-        # Contacts that crossed at the same instant, to rounding.
-        c = xx[:-1] - xx[1:]
-        r = vv[:-1] - vv[1:]
-        for j in range(m):
-            if active[j] and c[j] <= 0 and r[j] < -FLOOR:
-                switch(j, OPEN, tj, xx, vv)
-            elif not active[j] and c[j] >= 0 and r[j] > FLOOR:
-                switch(j, CLOSE, tj, xx, vv)
-
-    terminal = False
-    while len(events) < max_events:
-        if not active.any():
-            # Free flight: next collision in closed form.
-            c = x[:-1] - x[1:]
-            r = v[:-1] - v[1:]
-            best, jbest = np.inf, -1
-            for j in range(m):
-                if r[j] > FLOOR:
-                    tc = max(-c[j], 0.0) / r[j]
-                    if tc < best:
-                        best, jbest = tc, j
-            if jbest < 0:
-                terminal = True
-                break
-            if t + best > t_max:
-                break
-            x = x + v * best
-            t = t + best
-            x[jbest + 1] = x[jbest]   # exact touch
-            switch(jbest, CLOSE, t, x, v)
-            restart_consistency(t, x, v)
-            continue
-
-        # One smooth segment with a fixed active set.
-        rhs = _make_rhs(n, alpha, active)
-        y = np.concatenate((x, v))
-        solver = DOP853(rhs, t, y, t_max, rtol=rtol, atol=atol)
-        c0 = x[:-1] - x[1:]
-        last_sign = np.sign(c0)
-        found = None
-        while solver.status == "running":
-            t_old, y_old = solver.t, solver.y.copy()
-            msg = solver.step()
-            if solver.status == "failed":
-                raise RuntimeError(f"reference integration failed at t={t_old}: {msg}")
-            steps += 1
-            dense = solver.dense_output()
-            ts = np.linspace(t_old, solver.t, SAMPLES + 1)[1:]
-            ys = dense(ts)
-            ys[:, -1] = solver.y
-            cs = ys[:n - 1] - ys[1:n]                 # shape (m, SAMPLES)
-            candidates = []
-            for j in range(m):
-                s_prev = last_sign[j]
-                t_prev = t_old
-                want = -1.0 if active[j] else 1.0     # sign after the crossing
-                for i in range(SAMPLES):
-                    s = np.sign(cs[j, i])
-                    if s == want and s_prev != want:
-                        # c(t_prev) has sign s_prev or is exactly 0.
-                        tr = brentq(lambda tt: dense(tt)[j] - dense(tt)[j + 1],
-                                    t_prev, ts[i], xtol=1e-16, rtol=1e-15)
-                        yr = dense(tr)
-                        rate = yr[n + j] - yr[n + j + 1]
-                        if want * rate > FLOOR:
-                            candidates.append((tr, j))
-                            break
-                    if s != 0:
-                        s_prev = s
-                    t_prev = ts[i]
-                last_sign[j] = s_prev
-            if candidates:
-                tr, j = min(candidates)
-                found = (tr, j, t_old, y_old)
-                break
-
-        if found is None:
-            t = solver.t
-            x, v = solver.y[:n].copy(), solver.y[n:].copy()
-            break                                        # reached t_max
-
-        tr, j, t_old, y_old = found
-        # Newton on the integrated flow: no step crosses the non-smooth point.
-        yr = _integrate_to(rhs, t_old, y_old, tr, rtol, atol)
-        for _ in range(8):
-            dt = -(yr[j] - yr[j + 1]) / (yr[n + j] - yr[n + j + 1])
-            if abs(dt) <= 4e-16 * max(1.0, tr):
-                break
-            tr = tr + dt
-            yr = _integrate_to(rhs, t_old, y_old, tr, rtol, atol)
-        t = tr
-        x, v = yr[:n].copy(), yr[n:].copy()
-        switch(j, CLOSE if not active[j] else OPEN, t, x, v)
-        restart_consistency(t, x, v)
-
-    return RefSolution(
-        n=n, k=k, alpha=alpha, terminal=terminal, end_time=t,
-        final_position=x, final_velocity=v,
-        event_time=np.array([e[0] for e in events], dtype=float),
-        event_contact=np.array([e[1] for e in events], dtype=np.int64),
-        event_kind=np.array([e[2] for e in events], dtype=np.int8),
-        event_compression=np.array([e[3] for e in events], dtype=float),
-        separation_time=sep_t, separation_velocity=sep_v, steps=steps,
-    )
 
 
 # ======================================================================================
@@ -431,6 +248,9 @@ class RefLineSolution:
         ``OPEN`` (-1) or ``CLOSE`` (+1).
     event_compression : ndarray, shape (E,)
         The contact's compression at the event (zero to rounding).
+    separation_time, separation_velocity : ndarray, shape (N,)
+        Time and velocity at which each ball last lost its last contact (a wall's
+        included); NaN if it never did.
     times : ndarray, shape (T,)
     positions, velocities : ndarray, shape (T, N)
         The state at ``times``; past the end of a terminal run, the free flight that
@@ -450,6 +270,8 @@ class RefLineSolution:
     event_contact: np.ndarray
     event_kind: np.ndarray
     event_compression: np.ndarray
+    separation_time: np.ndarray
+    separation_velocity: np.ndarray
     times: np.ndarray
     positions: np.ndarray
     velocities: np.ndarray
@@ -695,14 +517,22 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
     loose = damped & active & (d0 > 0) & (law(d0, r0) <= 0.0)
     active &= ~loose
     events: list[tuple[float, int, int, float]] = []
+    sep_t = np.full(n, np.nan)
+    sep_v = np.full(n, np.nan)
     steps = 0
 
-    def switch(s: int, kind: int, tj: float, xx: np.ndarray) -> None:
+    def switch(s: int, kind: int, tj: float, xx: np.ndarray, vv: np.ndarray) -> None:
         events.append((tj, s - 1, kind, comp(xx)[s]))
         active[s] = kind == CLOSE
         # a damped contact released while still compressed stays loose until it closes
         # again (its law turns positive) or parts (delta crosses 0)
         loose[s] = kind == OPEN and damped[s] and comp(xx)[s] > 0.0
+        if kind == OPEN:
+            # slot s joins balls s - 1 and s; ball b's contacts are slots b and b + 1
+            for b in (s - 1, s):
+                if 0 <= b < n and not (active[b] or active[b + 1]):
+                    sep_t[b] = tj
+                    sep_v[b] = vv[b]
 
     def restart_consistency(tj: float, xx: np.ndarray, vv: np.ndarray) -> None:
         c, r = comp(xx), rate(vv)
@@ -710,9 +540,9 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
             if loose[s] and c[s] <= 0:
                 loose[s] = False                          # parted: no event
             if active[s] and c[s] <= 0 and r[s] < -FLOOR:
-                switch(s, OPEN, tj, xx)
+                switch(s, OPEN, tj, xx, vv)
             elif not active[s] and not loose[s] and c[s] >= 0 and r[s] > FLOOR:
-                switch(s, CLOSE, tj, xx)
+                switch(s, CLOSE, tj, xx, vv)
 
     def idle(xx, vv) -> bool:
         # Every active contact (if any) touches without load, without moving and
@@ -767,7 +597,7 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
             snap_free(t + best)
             x, v = fly(x, v, best)
             t = t + best
-            switch(sbest, CLOSE, t, x)
+            switch(sbest, CLOSE, t, x, v)
             restart_consistency(t, x, v)
             continue
 
@@ -848,7 +678,7 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
         if kind == 0:
             loose[s] = False                              # a loose contact parted
         else:
-            switch(s, kind, t, x)
+            switch(s, kind, t, x, v)
         restart_consistency(t, x, v)
 
     if terminal:
@@ -860,6 +690,7 @@ def reference_line(line, *, t_max: float | None = None, times=(), rtol: float = 
         event_contact=np.array([e[1] for e in events], dtype=np.int64),
         event_kind=np.array([e[2] for e in events], dtype=np.int8),
         event_compression=np.array([e[3] for e in events], dtype=float) * L,
+        separation_time=sep_t * T, separation_velocity=sep_v * V,
         times=times, positions=snap_x * L, velocities=snap_v * V, steps=steps,
         units=(M, L, T), dissipated=lost * F * L,
     )

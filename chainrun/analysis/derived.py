@@ -9,8 +9,9 @@ conventions, used everywhere:
   lost contact: nothing catches them afterwards);
 - a velocity is *significant* when its magnitude exceeds 1% of the impact velocity (the
   paper's threshold in sections 3 and 5a);
-- energy shares are fractions of the impact energy ``K/2``; momenta are in units of the
-  impact momentum of one ball;
+- energy shares are fractions of the impact energy (``physics.impact_energy``: K/2 on
+  the paper's line); energies and momenta are the line's own, from its masses and
+  contacts (``chainrun.solver.physics``);
 - a *wave* passing ball m is a peak of its velocity history v_m(t); its arrival time and
   peak value are refined by a parabola through the three samples around the peak.
 """
@@ -21,7 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from chainrun.solver.physics import compressions, contact_forces
+from chainrun.solver.physics import (
+    line_contact_forces, line_kinetic_energy, line_momentum, line_potential_energy,
+)
 
 __all__ = [
     "SIGNIFICANT",
@@ -29,6 +32,7 @@ __all__ = [
     "WaveTrain",
     "count_significant",
     "exponential_fit",
+    "impact_speed",
     "loglog_slope",
     "nearest_snapshots",
     "polynomial_extrapolation",
@@ -45,22 +49,32 @@ __all__ = [
 SIGNIFICANT = 0.01
 
 
-def count_significant(v, sign: int) -> int:
-    """Number of balls moving faster than ``SIGNIFICANT`` backwards (sign -1) or forwards."""
+def impact_speed(run) -> float:
+    """The largest initial speed of a run's line: the impact velocity of its strikers."""
+    return float(np.max(np.abs(run.line.velocity)))
+
+
+def count_significant(v, sign: int, speed: float) -> int:
+    """Number of balls moving backwards (sign -1) or forwards faster than
+    ``SIGNIFICANT`` of the impact ``speed``."""
     v = np.asarray(v, dtype=float)
-    return int(np.sum(sign * v > SIGNIFICANT))
+    return int(np.sum(sign * v > SIGNIFICANT * speed))
 
 
-def rebound_energy_share(v, k: int = 1) -> float:
-    """Kinetic energy of the rebounding balls (v < 0) as a share of the impact energy k/2."""
+def rebound_energy_share(v, mass, impact_energy: float) -> float:
+    """Kinetic energy of the rebounding balls (v < 0), of masses ``mass`` (one per
+    ball), as a share of the ``impact_energy``."""
     v = np.asarray(v, dtype=float)
-    return float(np.sum(v[v < 0] ** 2) / k)
+    back = v < 0
+    return float(line_kinetic_energy(v[back], np.broadcast_to(mass, v.shape)[back])
+                 / impact_energy)
 
 
-def rebound_momentum(v) -> float:
-    """Total momentum of the rebounding balls (v < 0)."""
+def rebound_momentum(v, mass) -> float:
+    """Total momentum of the rebounding balls (v < 0), of masses ``mass``."""
     v = np.asarray(v, dtype=float)
-    return float(np.sum(v[v < 0]))
+    back = v < 0
+    return float(line_momentum(v[back], np.broadcast_to(mass, v.shape)[back]))
 
 
 def loglog_slope(x, y) -> float:
@@ -248,31 +262,32 @@ class SolitaryWave:
 
 
 def solitary_wave(run, window: tuple[float, float], balls: tuple[int, int]) -> SolitaryWave:
-    """Measure the steady solitary wave of a K = 1 run.
+    """Measure the steady solitary wave of a K = 1 run, in its line's units.
 
     Parameters
     ----------
-    run : RunData
+    run : RunData or Solution
         K = 1, with dense snapshots over ``window``.
     window : (float, float)
         Times over which the wave is steady (the averages run over it).
     balls : (int, int)
         Balls (1-based, inclusive) the wave passes in its steady state.
     """
-    alpha = run.alpha
-    train = wave_train(run, 1, balls)
+    line = run.line
+    sc = line.scales()  # the thresholds are in the paper's units of the line
+    train = wave_train(run, 1, balls, settle=8.0 * sc.time, height=0.02 * sc.velocity)
     t = np.asarray(run.times, float)
     x = np.asarray(run.positions)
     v = np.asarray(run.velocities)
-    force = contact_forces(x, alpha)
-    forces = [refined_peaks(t, force[:, j - 1], 0.05)[1][0] for j in train.balls]
+    force = line_contact_forces(x, line)
+    forces = [refined_peaks(t, force[:, j - 1], 0.05 * sc.force)[1][0] for j in train.balls]
     sel = (t >= window[0]) & (t <= window[1])
     alive = run.separation_time[None, :] > t[sel][:, None]   # NaN (never) compares False
     alive |= np.isnan(run.separation_time)[None, :]
     vs = v[sel]
-    kinetic = 0.5 * np.sum(vs**2 * alive, axis=1)
-    potential = np.sum(np.clip(compressions(x[sel]), 0.0, None) ** (alpha + 1), axis=1) / (alpha + 1)
-    momentum = np.sum(vs * alive, axis=1)
+    kinetic = line_kinetic_energy(vs * alive, line.mass)
+    potential = line_potential_energy(x[sel], line, t[sel])
+    momentum = line_momentum(vs * alive, line.mass)
     width = np.mean(np.sum(alive & (np.abs(vs) > 0.01 * train.peak[0]), axis=1))
     sep = position_at_separation(run)
     return SolitaryWave(

@@ -18,9 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from chainrun.analysis import Inputs, Result
+from chainrun.analysis import derived
 from chainrun.analysis import gallery_measure as gm
 from chainrun.analysis.pulse import first_pulse, wave_speed
 from chainrun.materials import material
+from chainrun.solver.physics import line_kinetic_energy, line_momentum
 
 __all__ = ["cradle", "dimer", "head_on", "solitary", "taper", "transmission", "wall"]
 
@@ -153,10 +155,6 @@ def solitary(inputs: Inputs) -> Result:
 
 
 # ----------------------------------------------------------------------------- cradle
-def _initial_energy(run) -> float:
-    return float(0.5 * np.sum(run.model["mass"] * run.model["velocity"] ** 2))
-
-
 #: The cradle's experiments: (experiment, suffix of its values, panel, what it is).
 _CRADLES = (("cradle", "", 0, "elastic"),
             ("cradle-damped", "_damped", 1, "e = 0.95, Tsuji"),
@@ -168,13 +166,16 @@ def cradle(inputs: Inputs) -> Result:
     elastic and with a restitution of 0.95 (two damping laws)."""
     r = Result()
     r.setting("drift_time", 1.0)
+    both = []  # the (ball, K) of the two damped cradles
     for experiment, sfx, panel, what in _CRADLES:
         for run in inputs.runs(f"gallery/{experiment}"):
-            k = int(_swept(run, "chain.k"))
-            speed = float(run.model["velocity"][0])
+            k = run.k
+            speed = derived.impact_speed(run)
             v = run.final_velocity
             x = gm.drift(run.final_position, v, run.end_time, 1.0) * 1e3
-            for n in range(1, 6):
+            if sfx == "_damped":
+                both += [(n, k) for n in range(1, run.n + 1)]
+            for n in range(1, run.n + 1):
                 r.value(f"v_{n}_K{k}{sfx}", v[n - 1],
                         f"final velocity (m/s) of ball {n}, K = {k}, {what}")
                 r.value(f"scaled_{n}_K{k}{sfx}", v[n - 1] / speed,
@@ -184,20 +185,21 @@ def cradle(inputs: Inputs) -> Result:
             r.value(f"contact_us_K{k}{sfx}", run.end_time * 1e6,
                     f"time (microseconds) from first contact to the last, K = {k}, {what}")
             if sfx:
-                e0 = _initial_energy(run)
-                kinetic = float(0.5 * np.sum(run.model["mass"] * v**2))
+                e0 = run.impact_energy
+                kinetic = float(line_kinetic_energy(v, run.line.mass))
                 r.value(f"dissipated_K{k}{sfx}", run.dissipated_energy / e0,
                         f"share of the impact energy dissipated, K = {k}, {what}")
                 r.value(f"energy_balance_K{k}{sfx}",
                         abs(kinetic + run.dissipated_energy - e0) / e0,
                         f"|final kinetic + dissipated - initial| / initial, K = {k}, {what}")
             if panel is not None:
-                r.series("drift" if panel == 0 else "drift_damped", f"K={k}", np.arange(1, 6),
-                         x, label=f"K = {k}", role="data", panel=panel, marker=k - 1)
+                r.series("drift" if panel == 0 else "drift_damped", f"K={k}",
+                         np.arange(1, run.n + 1), x, label=f"K = {k}", role="data",
+                         panel=panel, marker=k - 1)
     r.value("speed", speed, "impact speed (m/s)")
     r.value("law_difference_mm", max(
         abs(r.values[f"drift_mm_{n}_K{k}_damped"] - r.values[f"drift_mm_{n}_K{k}_kk"])
-        for n in range(1, 6) for k in range(1, 5)),
+        for n, k in both),
         "largest difference (mm) of a ball's displacement at 1 s between the Tsuji and the "
         "Kuwabara-Kono cradle")
     return r
@@ -210,7 +212,7 @@ def _wall_contact(run) -> tuple[float, float, int]:
 
 
 def _column_restitution(run) -> float:
-    return gm.restitution(run.model["mass"], run.model["velocity"], run.final_velocity)
+    return gm.restitution(run.line.mass, run.line.velocity, run.final_velocity)
 
 
 def _wall_law(run) -> tuple[float, float, float, float]:
@@ -234,7 +236,7 @@ def wall(inputs: Inputs) -> Result:
         ns, es, ds = [], [], []
         for run in inputs.runs(f"gallery/{experiment}"):
             n = run.n
-            m = run.model["mass"]
+            m = run.line.mass
             e = _column_restitution(run)
             release, opened, count = _wall_contact(run)
             ns.append(n)
@@ -246,8 +248,8 @@ def wall(inputs: Inputs) -> Result:
             r.value(f"column_wall_contacts_{n}{sfx}", count,
                     f"separate wall contacts, column of {n}, {what}")
             if sfx:
-                e0 = _initial_energy(run)
-                kinetic = float(0.5 * np.sum(m * run.final_velocity**2))
+                e0 = run.impact_energy
+                kinetic = float(line_kinetic_energy(run.final_velocity, m))
                 r.value(f"column_dissipated_{n}{sfx}", run.dissipated_energy / e0,
                         f"share of the impact energy dissipated, column of {n}, {what}")
                 r.value(f"column_wall_dissipated_{n}{sfx}", run.wall_dissipation[1] / e0,
@@ -258,7 +260,7 @@ def wall(inputs: Inputs) -> Result:
                 r.value(f"column_open_us_{n}{sfx}", opened * 1e6,
                         f"time the wall's compression is gone (microseconds), column of {n}")
             if n == 1:
-                v = float(run.model["velocity"][0])
+                v = float(run.line.velocity[0])
                 eta, beta, kappa, alpha = _wall_law(run)
                 if sfx:
                     e_law = two_body.restitution(eta, beta, kappa, alpha, m[0], v)
@@ -315,26 +317,29 @@ def wall(inputs: Inputs) -> Result:
         r.series("speed", f"column{sfx}", speeds, ev, label=f"column of 8, {what}",
                  role="data", panel=2, marker=marker)
     for sfx, what, marker in (("", "elastic", 1), ("_damped", "e = 0.95, Tsuji", 3)):
-        for k in range(1, 5):
-            run = inputs.run(f"gallery/wall-2k{sfx.replace('_', '-')}-{k}")
-            m, v0, v = run.model["mass"], run.model["velocity"], run.final_velocity
+        runs = sorted((inputs.run(e) for e in inputs.artefact.experiments
+                       if e.rpartition("-")[0] == f"gallery/wall-2k{sfx.replace('_', '-')}"),
+                      key=lambda run: run.k)
+        for run in runs:
+            k = run.k
+            m, v0, v = run.line.mass, run.line.velocity, run.final_velocity
             e = gm.restitution(m, v0, v)
             release, _, count = _wall_contact(run)
             r.value(f"2k_e_{k}{sfx}", e, f"effective restitution, {k} striking {k} on a "
                                          f"wall, {what}")
             r.value(f"2k_strikers_{k}{sfx}", float(np.sum(v[:k]) / k),
                     f"mean final velocity of the {k} strikers, {what}")
-            r.value(f"2k_rest_{k}{sfx}", float(np.sum(v[k:]) / k),
+            r.value(f"2k_rest_{k}{sfx}", float(np.sum(v[k:]) / (run.n - k)),
                     f"mean final velocity of the {k} balls that rested on the wall, {what}")
             r.value(f"2k_release_{k}{sfx}", release,
                     f"time the wall lets go (paper units), K = {k}, {what}")
             r.value(f"2k_wall_contacts_{k}{sfx}", count,
                     f"separate wall contacts, K = {k}, {what}")
             if sfx:
-                r.value(f"2k_dissipated_{k}{sfx}", run.dissipated_energy / _initial_energy(run),
+                r.value(f"2k_dissipated_{k}{sfx}", run.dissipated_energy / run.impact_energy,
                         f"share of the impact energy dissipated, K = {k}, {what}")
-        r.series("restitution", f"2k{sfx}", np.arange(2, 9, 2),
-                 [r.values[f"2k_e_{k}{sfx}"] for k in range(1, 5)],
+        r.series("restitution", f"2k{sfx}", np.array([run.n for run in runs]),
+                 [r.values[f"2k_e_{run.k}{sfx}"] for run in runs],
                  label=f"K on K resting on the wall, {what}", role="data", panel=0,
                  marker=marker)
     return r
@@ -346,31 +351,36 @@ def head_on(inputs: Inputs) -> Result:
     r = Result()
     run = inputs.run("gallery/head-on")
     v = run.final_velocity
-    n = run.n
+    m = run.line.mass
+    ends = [0, run.n - 1]
     r.value("symmetry_error", float(np.max(np.abs(v + v[::-1]))),
             "largest |v_n + v_(N+1-n)| (0 by symmetry)")
     r.value("end_speed", float(v[-1]), "final velocity of ball N (the one struck at -1)")
-    r.value("end_energy_share", float((v[0] ** 2 + v[-1] ** 2) / 2.0),
+    r.value("end_energy_share", float(line_kinetic_energy(v[ends], m[ends]))
+            / run.impact_energy,
             "share of the impact energy carried away by the two end balls")
-    r.value("momentum_error", float(abs(np.sum(v))), "|total momentum| (0)")
-    r.value("moving_balls", int(np.sum(np.abs(v) > 0.01)),
+    r.value("momentum_error", float(abs(line_momentum(v, m))), "|total momentum| (0)")
+    r.value("moving_balls", int(np.sum(np.abs(v) > derived.SIGNIFICANT
+                                       * derived.impact_speed(run))),
             "balls leaving faster than 1% of the impact speed")
-    r.series("head_on", "equal", np.arange(1, n + 1), v, label="±1", role="data",
+    r.series("head_on", "equal", np.arange(1, run.n + 1), v, label="±1", role="data",
              panel=0, marker=0)
     run = inputs.run("gallery/head-on-unequal")
     u = run.final_velocity
+    n = run.n
     r.value("unequal_first", float(u[0]), "final velocity of ball 1, strikers +1 and -0.5")
     r.value("unequal_last", float(u[-1]), "final velocity of ball N, strikers +1 and -0.5")
-    r.value("unequal_momentum", float(np.sum(u)), "total momentum (0.5)")
+    r.value("unequal_momentum", float(line_momentum(u, run.line.mass)),
+            "total momentum (0.5)")
     r.series("head_on", "unequal", np.arange(1, n + 1), u, label="+1 and −0.5", role="data",
              panel=0, marker=1)
     masses, refl, trans, two = [], [], [], []
     for experiment in (e for e in inputs.artefact.experiments if "impurity" in e):
         run = inputs.run(experiment)
-        m = run.model["mass"]
+        m = run.line.mass
         at = int(np.argmax(np.abs(m - 1.0))) + 1
         before, on, after = gm.energy_split(m, run.final_velocity, at)
-        e0 = 0.5
+        e0 = run.impact_energy
         mu = float(m[at - 1])
         masses.append(mu)
         refl.append(before / e0)
@@ -401,11 +411,11 @@ def taper(inputs: Inputs) -> Result:
         name = experiment.rsplit("-", 1)[1]
         run = inputs.run(experiment)
         q = float(name)
-        m = run.model["mass"]
+        m = run.line.mass
         first = float(run.sensor_force[:, 0, 0].max())   # contact 1 (balls 1-2)
         last = float(run.sensor_force[:, 1, 1].max())    # contact 19 (balls 19-20)
-        e_in = 0.5 * m[0] * run.model["velocity"][0] ** 2
-        e_out = 0.5 * m[-1] * run.final_velocity[-1] ** 2
+        e_in = run.impact_energy
+        e_out = float(line_kinetic_energy(run.final_velocity[-1:], m[-1:]))
         qs.append(q)
         force.append(last / first)
         energy.append(e_out / e_in)
@@ -413,7 +423,7 @@ def taper(inputs: Inputs) -> Result:
                 f"peak force of the last contact over the first, taper {name}")
         r.value(f"energy_out_{name}", e_out / e_in,
                 f"kinetic energy of the last bead over the impact energy, taper {name}")
-        r.value(f"speed_out_{name}", float(run.final_velocity[-1] / run.model["velocity"][0]),
+        r.value(f"speed_out_{name}", float(run.final_velocity[-1] / derived.impact_speed(run)),
                 f"velocity of the last bead over the impact speed, taper {name}")
     r.series("taper", "force", qs, force, label="last contact / first (peak force)",
              role="data", panel=0, marker=0)
@@ -432,11 +442,11 @@ def dimer(inputs: Inputs) -> Result:
     for experiment in inputs.artefact.experiments:
         name = experiment.rsplit("-", 1)[1]
         run = inputs.run(experiment)
-        m = run.model["mass"]
+        m = run.line.mass
         v = run.final_velocity
-        e = 0.5 * m[lo - 1:hi] * v[lo - 1:hi] ** 2
         ratios.append(float(name))
-        left.append(float(e.sum() / 0.5))
+        left.append(float(line_kinetic_energy(v[lo - 1:hi], m[lo - 1:hi]))
+                    / run.impact_energy)
         r.value(f"left_{name}", left[-1], f"energy share left in balls {lo}-{hi}, "
                                           f"mass ratio {name}")
     ratios, left = np.array(ratios), np.array(left)

@@ -36,6 +36,7 @@ import numpy as np
 from scipy import integrate
 
 from chainrun.solver import EventKind
+from chainrun.solver.physics import line_kinetic_energy, line_momentum
 
 __all__ = [
     "PAPER_TO_SI",
@@ -104,9 +105,7 @@ def nesterenko_precompressed_ratio(f_r):
 
 def restitution(mass, v_initial, v_final) -> float:
     """Effective restitution of a line against a wall: ``-sum(m v_final)/sum(m v_initial)``."""
-    m = np.asarray(mass, dtype=float)
-    return float(-np.sum(m * np.asarray(v_final, float)) / np.sum(m * np.asarray(v_initial,
-                                                                                float)))
+    return float(-line_momentum(v_final, mass) / line_momentum(v_initial, mass))
 
 
 def wall_contact(event_time, event_contact, event_kind, contact: int
@@ -150,9 +149,10 @@ def wall_contact(event_time, event_contact, event_kind, contact: int
 
 def energy_split(mass, v, at: int) -> tuple[float, float, float]:
     """Kinetic energy of the balls before ball ``at`` (1-based), of it, and after it."""
-    e = 0.5 * np.asarray(mass, float) * np.asarray(v, float) ** 2
+    m, v = np.asarray(mass, float), np.asarray(v, float)
     i = at - 1
-    return float(e[:i].sum()), float(e[i]), float(e[i + 1:].sum())
+    return tuple(float(line_kinetic_energy(v[part], m[part]))
+                 for part in (slice(None, i), slice(i, i + 1), slice(i + 1, None)))
 
 
 def drift(final_position, final_velocity, end_time: float, t: float) -> np.ndarray:

@@ -36,16 +36,18 @@ TABLE1_PRINTED = (
 SATURATION = 1e-3
 
 
-def _rebound(r: Result, v: np.ndarray, fit=(2, 15)) -> None:
+def _rebound(r: Result, run, fit=(2, 15)) -> None:
     """The rebound numbers of section 5a from a K = 1 line's final velocities."""
+    v = run.final_velocity
     n = np.arange(1, len(v) + 1)
     for i in (1, 2, 3):
         r.value(f"v_{i}", v[i - 1], f"rebound velocity of ball {i}")
-    r.value("rebound_significant", derived.count_significant(v, -1),
+    r.value("rebound_significant", derived.count_significant(v, -1, derived.impact_speed(run)),
             "balls rebounding faster than 1% of the impact velocity")
-    r.value("rebound_energy_percent", 100 * derived.rebound_energy_share(v),
+    r.value("rebound_energy_percent",
+            100 * derived.rebound_energy_share(v, run.line.mass, run.impact_energy),
             "kinetic energy of the rebounding balls, % of the impact energy")
-    r.value("rebound_momentum", derived.rebound_momentum(v),
+    r.value("rebound_momentum", derived.rebound_momentum(v, run.line.mass),
             "total momentum of the rebounding balls")
     for lo, hi in (fit, (3, fit[1])):
         sel = (n >= lo) & (n <= hi)
@@ -103,7 +105,7 @@ def sec5a(inputs: Inputs) -> Result:
             f"stays within {SATURATION:.1%} of the saturated value")
     r.value("saturation_ball", first + 1, "that ball")
     v = run.final_velocity
-    _rebound(r, v)
+    _rebound(r, run)
     _ejected(r, v)
     r.array("energy/t", wave.times)
     r.array("energy/kinetic", wave.kinetic)
@@ -238,7 +240,7 @@ def fig09(inputs: Inputs) -> Result:
     r.series("series", "rebound", n[back], -v[:shown][back], label="rebound velocity")
     r.series("series", "printed", n.astype(float), 0.084 * np.exp(-0.55 * n), role="guide",
              label=r"$0.084\,e^{-0.55n}$")
-    _rebound(r, v)
+    _rebound(r, run)
     _ejected(r, v)
     r.setting("balls_shown", shown)
     return r
@@ -344,7 +346,7 @@ def fig13(inputs: Inputs) -> Result:
         n = np.arange(1, run.n + 1)
         back = v < 0
         r.series("series", f"K={k}", n[back] / k, -v[back], label=f"K = {k}")
-        significant = derived.count_significant(v, -1)
+        significant = derived.count_significant(v, -1, derived.impact_speed(run))
         r.value(f"rebound_K{k}", np.sum(back), f"balls with a negative final velocity, K = {k}")
         r.value(f"significant_K{k}", significant,
                 f"balls rebounding faster than 1% of V, K = {k}")

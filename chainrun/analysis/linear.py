@@ -40,7 +40,7 @@ def fig01(inputs: Inputs) -> Result:
     for n in range(1, run.n + 1):
         r.value(f"v_{n}", v[n - 1], f"final velocity of ball {n}")
     r.value("rebound_count", np.sum(v < 0), "balls with a negative final velocity")
-    r.value("forward_significant", derived.count_significant(v, +1),
+    r.value("forward_significant", derived.count_significant(v, +1, derived.impact_speed(run)),
             "balls moving forward faster than 1% of the impact velocity")
     r.value("forward_fast", np.sum(v > 0.1), "balls moving forward faster than 0.1")
     r.value("slow_forward", np.sum((v > 0) & (v <= 0.1)),
@@ -67,10 +67,11 @@ def fig02(inputs: Inputs) -> Result:
     r.value("guide_coefficient", c, "coefficient C of the dashed guide C n^(-3/4)")
     r.value("slope_fit", derived.loglog_slope(n[sel], v[sel]),
             "least-squares log-log slope of the rebound velocities, balls 5..20")
-    r.value("rebound_significant", derived.count_significant(v, -1),
+    r.value("rebound_significant", derived.count_significant(v, -1, derived.impact_speed(run)),
             "balls rebounding faster than 1% of the impact velocity")
     r.value("rebound_count", np.sum(back), "balls with a negative final velocity")
-    r.value("rebound_energy_percent", 100 * derived.rebound_energy_share(v),
+    r.value("rebound_energy_percent",
+            100 * derived.rebound_energy_share(v, run.line.mass, run.impact_energy),
             "kinetic energy of the rebounding balls, % of the impact energy")
     r.setting("guide_fit_balls", list(fit_range))
     return r
@@ -219,7 +220,7 @@ def fig07(inputs: Inputs) -> Result:
         r.series("series", f"N={big_n}", X[keep], v[keep] * big_n ** (1 / 6),
                  label=f"N = {big_n}")
         coefficient = v[-1] * big_n ** (1 / 6)
-        count = derived.count_significant(v, +1) / big_n ** (1 / 3)
+        count = derived.count_significant(v, +1, derived.impact_speed(run)) / big_n ** (1 / 3)
         r.value(f"coefficient_N{big_n}", coefficient, f"v_N N^(1/6) for N = {big_n}")
         r.value(f"significant_N{big_n}", count,
                 f"balls flying off faster than 1% of V, over N^(1/3), N = {big_n}")
@@ -246,7 +247,7 @@ def sec4(inputs: Inputs) -> Result:
 
     # energy share of the rebounding balls: partial sums, extrapolated in M^(-2/3), 1/M
     lo, hi = big_n // 10, int(0.9 * big_n)
-    partial = np.cumsum(np.where(v < 0, v, 0.0) ** 2)
+    partial = np.cumsum(run.line.mass * np.where(v < 0, v, 0.0) ** 2) / (2 * run.impact_energy)
     m = np.arange(lo, hi + 1)
     c = derived.power_series_fit(m, partial[m - 1], (2 / 3, 1))
     share = c[0]
@@ -254,7 +255,8 @@ def sec4(inputs: Inputs) -> Result:
             f"energy of the rebounding balls of an infinite line, % of the impact energy "
             f"(partial sums over balls 1..M, M = {lo}..{hi}, extrapolated in M^(-2/3), 1/M)")
     r.value("wave_energy_percent", 100 * (1 - share), "100% minus the rebounding share")
-    r.value("rebound_energy_percent_N", 100 * derived.rebound_energy_share(v),
+    r.value("rebound_energy_percent_N",
+            100 * derived.rebound_energy_share(v, run.line.mass, run.impact_energy),
             f"energy of the rebounding balls of this line of {big_n}, %")
     # when does the share of the balls separated so far reach the paper's 3.78%?
     order = np.argsort(run.separation_time)

@@ -1,8 +1,8 @@
 """The event-driven solver: the public types and the ``simulate`` drivers.
 
 This package owns the dynamics and nothing else: it turns a line of balls (``Line``:
-masses, contacts, walls, forces; or the paper's N, K, alpha), output times and an
-accuracy into arrays, and never touches files. ``model`` defines the line and the
+masses, contacts, walls, forces; the paper's N, K, alpha is ``Line.paper``), output
+times and an accuracy into arrays, and never touches files. ``model`` defines the line and the
 scales it is solved in; ``physics`` the force law and the conserved quantities for
 the store and the analysis; ``_driver`` converts the line to those scales, runs the
 numba kernels between output times, maps their integer status codes to named
@@ -74,7 +74,6 @@ __all__ = [
     "Wall",
     "load_kernels",
     "simulate",
-    "simulate_line",
     "velocity_floor",
 ]
 
@@ -121,12 +120,11 @@ class Outcome(enum.Enum):
 class Diagnostics:
     """Cost and accuracy of one run.
 
-    For the paper's line, momentum_error is absolute (the initial momentum is K) and
-    energy_error relative to the initial energy K/2. For any other line, momentum_error
-    is relative to the momentum of its scales, with the external forces' and the walls'
-    impulses accounted, and energy_error to its initial kinetic energy, with the
-    external forces' work and the damping's dissipation accounted
-    (``_driver._diagnostics``). Each cluster's internal energy is projected
+    momentum_error is relative to the momentum of the line's scales (absolute on the
+    paper's line, whose initial momentum is K), with the external forces', the drives'
+    and the walls' impulses accounted, and energy_error to its initial kinetic energy
+    (K/2 on the paper's line), with the external forces' work, the drives' and the
+    damping's dissipation accounted (``_driver._diagnostics``). Each cluster's internal energy is projected
     back to its conserved value at every change of structure (see
     ``_projection._project_energy``); energy_correction is the sum of those corrections,
     relative like energy_error, the honest measure of the integration error that the
@@ -190,8 +188,8 @@ class Solution:
         contains it.
     line : Line
         The line that was run. Every result is in its units; ``n``, ``k`` and
-        ``alpha`` are its number of balls, of balls moving at t = 0 and its contacts'
-        exponent (NaN if they differ).
+        ``alpha`` are its number of balls, its strikers (``model.strikers``) and its
+        contacts' exponent (NaN if they differ).
     dissipated : ndarray, shape (T,)
         The energy dissipated by the damping by each snapshot time (0 on an elastic
         line).
@@ -272,9 +270,7 @@ ProgressHook = Callable[[float], None]
 
 
 def simulate(
-    n: int,
-    k: int,
-    alpha: float,
+    line: Line,
     times=(),
     *,
     t_end: float | None = None,
@@ -287,16 +283,18 @@ def simulate(
     sensor_end: float | None = None,
     closed_form: bool = True,
 ) -> Solution:
-    """Run one line of balls to its terminal state (or to ``t_end``).
+    """Run a line of balls to its terminal state (or to ``t_end``).
+
+    Inputs and results are in the line's own units; the run itself is in the units of
+    its scales (``Line.scales``). A line whose forces keep doing work, that is driven,
+    or that is held between two walls has no terminal state
+    (``Line.has_terminal_state``): it needs ``t_end``.
 
     Parameters
     ----------
-    n : int
-        Number of balls, >= 1.
-    k : int
-        Number of impacting balls at velocity 1, 1 <= k <= n.
-    alpha : float
-        Contact exponent, >= 1 (1 linear, 1.5 Hertz).
+    line : Line
+        Masses, contacts, walls, forces, drives and the initial state; the paper's line
+        of N unit balls, K of them striking at velocity 1, is ``Line.paper(n, k, alpha)``.
     times : array_like, shape (T,)
         Non-decreasing, non-negative snapshot times. Snapshots are the exact state
         at those times (interpolated within a step, analytic in free flight).
@@ -335,35 +333,6 @@ def simulate(
     from chainrun.solver._driver import run
 
     return run(
-        n, k, alpha, times, t_end=t_end, rtol=rtol, max_events=max_events,
-        on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
-        sensor_dt=sensor_dt, sensor_end=sensor_end, closed_form=closed_form,
-    )
-
-
-def simulate_line(
-    line: Line,
-    times=(),
-    *,
-    t_end: float | None = None,
-    rtol: float = DEFAULT_RTOL,
-    max_events: int | None = None,
-    on_snapshot: SnapshotHook | None = None,
-    on_progress: ProgressHook | None = None,
-    sensors=(),
-    sensor_dt: float | None = None,
-    sensor_end: float | None = None,
-    closed_form: bool = True,
-) -> Solution:
-    """Run any ``Line`` (masses, stiffnesses, exponents, gaps, walls, forces) to its
-    terminal state, or to ``t_end``; inputs and results in the line's own units.
-
-    The arguments are those of ``simulate``. A line whose forces keep doing work, or
-    that is held between two walls, has no terminal state: it needs ``t_end``.
-    """
-    from chainrun.solver._driver import run_line
-
-    return run_line(
         line, times, t_end=t_end, rtol=rtol, max_events=max_events,
         on_snapshot=on_snapshot, on_progress=on_progress, sensors=sensors,
         sensor_dt=sensor_dt, sensor_end=sensor_end, closed_form=closed_form,

@@ -21,10 +21,10 @@ from chainrun.solver import (
     velocity_floor,
 )
 from chainrun.solver import _jit, _loop, _state
-from chainrun.solver.model import Line, _alike
+from chainrun.solver.model import Line, _alike, strikers
 from chainrun.solver.physics import (
-    contact_forces, kinetic_energy, line_kinetic_energy, line_momentum,
-    line_potential_energy, momentum, potential_energy,
+    contact_law, contact_load, impulse, line_kinetic_energy, line_momentum,
+    line_potential_energy,
 )
 
 _EVENT_BUFFER = 1 << 16
@@ -58,7 +58,7 @@ def _evaluate(S: _state.State, task: int, t: float) -> None:
     _loop.advance(S)
 
 
-def release_compression(alpha, floor, stiffness=1.0, inverse_mass=2.0):
+def release_compression(alpha, floor, stiffness, inverse_mass):
     """Compression whose stored energy equals a relative speed of ``floor``.
 
     Solves ``2 kappa c^(alpha+1) / ((alpha+1) mu) = floor^2`` (mu the pair's reduced
@@ -84,16 +84,6 @@ def _check_inputs(times, t_end, rtol, max_events):
     if max_events is not None and (int(max_events) != max_events or max_events < 1):
         raise ValueError(f"max_events must be a positive integer, got {max_events!r}")
     return times
-
-
-def _check_paper(n, k, alpha):
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be an integer >= 1, got {n!r}")
-    if isinstance(k, bool) or int(k) != k or not 1 <= k <= n:
-        raise ValueError(f"k must be an integer with 1 <= k <= n ({n}), got {k!r}")
-    if not (math.isfinite(alpha) and alpha >= 1.0):
-        raise ValueError(f"alpha must be a finite number >= 1, got {alpha!r}")
-    return int(n), int(k), float(alpha)
 
 
 class _Prepared:
@@ -282,7 +272,6 @@ def _uniform(f, *args):
 
 def _new_state(n, k, alpha, rtol, t_end, max_events) -> _state.State:
     """The state of the paper's line (for the kernels' tests and their compilation)."""
-    n, k, alpha = _check_paper(n, k, alpha)
     return _line_state(_Prepared(Line.paper(n, k, alpha)), rtol, t_end, max_events)
 
 
@@ -306,8 +295,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
             # a damped contact active at t = 0 whose load would pull starts held at 0
             y, v = P.y0, P.v0
             c = y[:-1] - y[1:]
-            load = (P.kappa * np.sign(c) * np.abs(c) ** P.alpha
-                    + P.eta * np.abs(c) ** P.beta * (v[:-1] - v[1:]))
+            load = contact_load(c, v[:-1] - v[1:], P.kappa, P.alpha, P.eta, P.beta)
             cp[_state.C_HELD] = ((cst != _state.OPEN) & (P.eta > 0.0) & (load < 0.0))
     else:
         cst, lvl = np.full(1, _state.DORMANT, np.int8), np.zeros(1)
@@ -455,32 +443,24 @@ class _Sensors:
         for s, ball in enumerate(self.balls - 1 + P.lw):
             for side, (a, b) in enumerate(((ball - 1, ball), (ball, ball + 1))):
                 if a >= 0 and b < P.nb:
-                    damping = dict(v=np.stack([u[:, where[a]], u[:, where[b]]], axis=-1),
-                                   damping=P.eta[a], damping_exponent=P.beta[a]) \
-                        if P.damped else {}
-                    out[:, s, side] = contact_forces(
-                        np.stack([y[:, where[a]], y[:, where[b]]], axis=-1),
-                        P.alpha[a], P.kappa[a], **damping)[:, 0]
+                    damping = dict(rate=u[:, where[a]] - u[:, where[b]], eta=P.eta[a],
+                                   beta=P.beta[a]) if P.damped else {}
+                    out[:, s, side] = contact_law(y[:, where[a]] - y[:, where[b]],
+                                                  P.kappa[a], P.alpha[a], **damping)
         return self.dt * np.arange(self.count) * P.scales.time, out * P.scales.force
 
 
-def run(n, k, alpha, times=(), **kw) -> Solution:
-    """See ``chainrun.solver.simulate``."""
-    n, k, alpha = _check_paper(n, k, alpha)
-    return run_line(Line.paper(n, k, alpha), times, **kw)
-
-
-def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
-             on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None,
-             sensor_end=None, closed_form=True) -> Solution:
-    """See ``chainrun.solver.simulate_line``: the run in the units of the line's scales,
+def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
+        on_snapshot=None, on_progress=None, sensors=(), sensor_dt=None,
+        sensor_end=None, closed_form=True) -> Solution:
+    """See ``chainrun.solver.simulate``: the run in the units of the line's scales,
     its inputs and results converted at the edges."""
     if not isinstance(line, Line):
         raise TypeError(f"expected a chainrun.solver.Line, got {type(line).__name__}")
     times = _check_inputs(times, t_end, rtol, max_events)
     if t_end is None and not line.has_terminal_state:
-        raise ValueError("this line has no terminal state (an external force or a drive "
-                         "keeps doing work, or walls hold it at both ends): give t_end")
+        raise ValueError(f"this line has no terminal state "
+                         f"({' and '.join(line.terminal_obstacles())}): give t_end")
     if line.n == 1 and line.left is None and line.right is None and line.drives:
         raise ValueError("a lone ball without walls touches nothing: its drive alone moves "
                          "it, with nothing to solve")
@@ -602,10 +582,9 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
         walls[0] = per_contact[0]
     if P.rw:
         walls[1] = per_contact[P.nb - 2]
-    moving = np.flatnonzero(line.velocity != 0.0)
     alphas = np.concatenate([line.alpha, [w.alpha for w in line.walls if w is not None]])
     return Solution(
-        n=n, k=int(moving.size),
+        n=n, k=strikers(line),
         alpha=float(alphas[0]) if alphas.size and np.all(alphas == alphas[0]) else math.nan,
         outcome=outcome, message=message,
         end_time=t_final * tscale, terminal=outcome is Outcome.TERMINAL,
@@ -626,53 +605,43 @@ def run_line(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=
 
 
 def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
-    """Conservation checks of the run just ended (final internal state y, v at time t).
+    """Conservation checks of the run just ended (final internal state y, v at time t),
+    in the line's own units (``physics``).
 
-    The paper's line: momentum and energy in its units, absolute and relative to the
-    initial energy K/2, as ever. Any other line, in its own units (``physics``): the
-    momentum changes by the external forces' impulse ``sum f t`` (with a wall it is not
-    the walls' impulses, or the drives'), relative to the momentum of the line's
-    scales; kinetic plus contact energy less the forces' work is conserved,
-    relative to the initial kinetic energy (or, for a line starting at rest, to its
-    initial energy or the work, the larger); on a damped line the energy the damping
-    dissipated counts in the balance, on a driven line the drives' work (relative to
-    the energy in motion: the largest of the initial and final kinetic energy, the
-    work and the contacts' energy gained).
+    The momentum changes by the external forces', the drives' and the walls' impulses
+    (``physics.impulse``); its error is relative to the momentum of the line's scales
+    (absolute for the paper's line, whose scales are 1). Kinetic plus contact energy
+    less the forces' work is conserved, relative to the initial kinetic energy (K/2
+    for the paper's line; for a line starting at rest, to its initial energy or the
+    work, the larger); on a damped line the energy the damping dissipated counts in the
+    balance, on a driven line the drives' work (relative to the energy in motion: the
+    largest of the initial and final kinetic energy, the work and the contacts' energy
+    gained).
     """
     line = P.line
-    if line.is_paper and np.all(line.alpha == P.alpha0):
-        p_err = abs(float(momentum(v)) - float(momentum(P.v0)))
-        e0 = float(kinetic_energy(P.v0))
-        e1 = float(kinetic_energy(v) + potential_energy(y, P.alpha0))
-        scale = e0
-        eproj = float(S.fs[_state.F_EPROJ])
+    sc = P.scales
+    x0, v0 = line.position, line.velocity
+    x1, v1 = P.positions(y), P.velocities(v)
+    m = line.mass
+    t_end = t * sc.time
+    walls = float(S.fs[_state.F_JL] - S.fs[_state.F_JR]) * sc.mass * sc.velocity
+    p_exp = line_momentum(v0, m) + impulse(line, t_end, walls)
+    p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
+    k0 = float(line_kinetic_energy(v0, m))
+    u0 = float(line_potential_energy(x0, line, 0.0))
+    e0 = k0 + u0
+    # what the damping dissipated is part of the balance, less what the drives did
+    k1 = float(line_kinetic_energy(v1, m))
+    u1 = float(line_potential_energy(x1, line, t_end))
+    work = float(S.fs[_state.F_WORK]) * sc.energy
+    e1 = k1 + u1 + float(S.fs[_state.F_DISS]) * sc.energy - work
+    # relative to the energy of the impact (a precompressed line stores far more,
+    # at rest), or for a line starting at rest to the energy it takes up
+    if P.driven:
+        scale = max(k0, k1, abs(work), abs(u1 - u0))
     else:
-        sc = P.scales
-        x0, v0 = line.position, line.velocity
-        x1, v1 = P.positions(y), P.velocities(v)
-        m = line.mass
-        # the walls' impulses (integrated along the run, as the dissipated energy is)
-        # and the external forces' change the momentum
-        walls = float(S.fs[_state.F_JL] - S.fs[_state.F_JR]) * sc.mass * sc.velocity
-        t_end = t * sc.time
-        drives = sum(float(d.integral(t_end)) for _, d in line.drives)
-        p_exp = line_momentum(v0, m) + float(np.sum(line.force)) * t_end + walls + drives
-        p_err = abs(float(line_momentum(v1, m) - p_exp)) / (sc.mass * sc.velocity)
-        k0 = float(line_kinetic_energy(v0, m))
-        u0 = float(line_potential_energy(x0, line, 0.0))
-        e0 = k0 + u0
-        # what the damping dissipated is part of the balance, less what the drives did
-        k1 = float(line_kinetic_energy(v1, m))
-        u1 = float(line_potential_energy(x1, line, t_end))
-        work = float(S.fs[_state.F_WORK]) * sc.energy
-        e1 = k1 + u1 + float(S.fs[_state.F_DISS]) * sc.energy - work
-        # relative to the energy of the impact (a precompressed line stores far more,
-        # at rest), or for a line starting at rest to the energy it takes up
-        if P.driven:
-            scale = max(k0, k1, abs(work), abs(u1 - u0))
-        else:
-            scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
-        eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
+        scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
+    eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0
     return Diagnostics(

@@ -238,8 +238,14 @@ class Line:
 
     @classmethod
     def paper(cls, n: int, k: int, alpha: float) -> Line:
-        """The paper's line: unit masses and stiffnesses, the first k balls at 1."""
-        return cls.make(n, k=k, alpha=alpha)
+        """The paper's line: unit masses and stiffnesses, the first k balls at 1.
+
+        n >= 1 balls, 0 <= k <= n strikers (0: the line at rest; ``make`` checks both),
+        one exponent alpha >= 1 (1 linear, 1.5 Hertz).
+        """
+        if not (math.isfinite(alpha) and alpha >= 1.0):
+            raise ValueError(f"alpha must be a finite number >= 1, got {alpha!r}")
+        return cls.make(n, k=k, alpha=float(alpha))
 
     @property
     def n(self) -> int:
@@ -249,12 +255,23 @@ class Line:
     def walls(self) -> tuple[Wall | None, Wall | None]:
         return self.left, self.right
 
+    def terminal_obstacles(self) -> tuple[str, ...]:
+        """Why no terminal state can exist, one reason each (none: it can): an external
+        force keeps doing work, a drive does, or walls hold the line at both ends. A
+        run of such a line needs a stop time."""
+        reasons = []
+        if np.any(self.force != 0.0):
+            reasons.append("an external force keeps doing work")
+        if self.is_driven:
+            reasons.append("a drive keeps doing work")
+        if self.left is not None and self.right is not None:
+            reasons.append("walls hold it at both ends")
+        return tuple(reasons)
+
     @property
     def has_terminal_state(self) -> bool:
-        """Whether a terminal state can exist: no external force keeps doing work, no
-        drive, and the line is not held between two walls."""
-        return (not np.any(self.force != 0.0) and not (self.left and self.right)
-                and not self.is_driven)
+        """Whether a terminal state can exist (``terminal_obstacles``)."""
+        return not self.terminal_obstacles()
 
     @property
     def is_driven(self) -> bool:

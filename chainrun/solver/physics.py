@@ -1,71 +1,83 @@
-"""Forces and conserved quantities of the line (pure numpy, any shape of batch).
+"""The force law and the conserved quantities of a line (pure numpy, any shape of batch).
 
-The one home of the energy and momentum formulas; the solver's diagnostics, the run
-files' observables and the analysis all call these.
+The one home of the force, energy and momentum formulas of a ``Line``
+(``chainrun.solver.model``: masses, stiffnesses, exponents, gaps, walls, external
+forces, damping); the solver's diagnostics, the run files' observables, the analysis
+and the checks all call these. Where every contact has one law (the paper's line among
+them), the law is factored out of the sum, and a mass of 1 multiplies nothing: the
+paper's line gets the numbers of its own formulas (sum v^2 / 2, sum v, sum
+c^(alpha+1) / (alpha+1)) to the bit. The kernels' home of the law is ``_forces``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from chainrun.solver import model
+
+
+def _alike(a) -> bool:
+    """Whether ``a`` (a number or an array) holds one value only."""
+    return model._alike(np.atleast_1d(a))
+
+
+def _first(a) -> float:
+    return float(np.atleast_1d(a)[0])
+
 
 def compressions(x: np.ndarray) -> np.ndarray:
-    """Compression of each contact, ``c_j = x_j - x_{j+1}``; shape (..., N-1)."""
+    """Difference of neighbouring displacements, ``x_j - x_{j+1}``; shape (..., N-1)."""
     x = np.asarray(x, dtype=float)
     return x[..., :-1] - x[..., 1:]
 
 
+# --- the force law --------------------------------------------------------------------------
+
+
+def contact_load(delta, rate, kappa, alpha, eta, beta):
+    """``kappa delta |delta|^(alpha-1) + eta |delta|^beta rate``: the law's elastic and
+    damping parts before it is held at 0, continued smoothly to ``delta < 0``
+    (negative: the contact would pull). Any shapes that broadcast, or scalars."""
+    return (kappa * np.sign(delta) * np.abs(delta) ** alpha
+            + eta * np.abs(delta) ** beta * rate)
+
+
+def contact_law(delta, kappa, alpha, rate=None, eta=0.0, beta=0.0) -> np.ndarray:
+    """Force of contacts compressed by ``delta`` (the gap taken off): ``kappa
+    delta_+^alpha``; with a compression ``rate`` and a damping ``eta`` (exponent
+    ``beta``), ``max(0, kappa delta^alpha + eta delta^beta rate)`` for delta > 0, 0
+    apart. It never pulls. Arguments broadcast (per contact, or numbers)."""
+    delta = np.asarray(delta, dtype=float)
+    f = np.clip(delta, 0.0, None) ** alpha
+    f = f if np.all(np.asarray(kappa) == 1.0) else f * kappa
+    if rate is None or not np.any(np.asarray(eta) != 0.0):
+        return f
+    d = np.clip(delta, 0.0, None)
+    load = f + eta * d ** beta * rate
+    return np.where(delta > 0.0, np.clip(load, 0.0, None), 0.0)
+
+
+def line_contact_forces(x: np.ndarray, line, v: np.ndarray | None = None) -> np.ndarray:
+    """Force of each contact between balls of ``line`` (its stiffnesses, exponents, gaps
+    and, with the velocities ``v``, its damping) at displacements ``x`` of shape
+    (..., N); shape (..., N-1). The walls' contacts are not among them."""
+    delta = compressions(x)
+    if np.any(line.gap != 0.0):
+        delta = delta - line.gap
+    rate = None if v is None else compressions(v)
+    return contact_law(delta, line.stiffness, line.alpha, rate, line.damping,
+                       line.damping_exponent)
+
+
 def contact_forces(x: np.ndarray, alpha, stiffness=1.0, gap=0.0, v=None, damping=0.0,
                    damping_exponent=0.0) -> np.ndarray:
-    """Force of each contact, ``kappa (c - g)_+^alpha`` (it never pulls); shape (..., N-1).
-
-    ``alpha``, ``stiffness`` and ``gap`` are numbers or one per contact; ``c`` are the
-    differences of ``x`` (``compressions``), so a gap of 0 gives the paper's law. With
-    velocities ``v`` (shape of ``x``) and a ``damping`` eta (exponent beta), the damped
-    law ``max(0, kappa d^alpha + eta d^beta d')`` for d = c - g > 0, 0 apart.
-    """
-    c = compressions(x)
+    """``contact_law`` of the contacts between neighbours of ``x`` (shape (..., N)),
+    their laws given one by one (numbers, or one per contact); shape (..., N-1)."""
+    delta = compressions(x)
     if np.any(np.asarray(gap) != 0.0):
-        c = c - gap
-    f = np.clip(c, 0.0, None) ** alpha
-    f = f if np.all(np.asarray(stiffness) == 1.0) else f * stiffness
-    if v is None or not np.any(np.asarray(damping) != 0.0):
-        return f
-    d = np.clip(c, 0.0, None)
-    load = f + damping * d ** damping_exponent * compressions(v)
-    return np.where(c > 0.0, np.clip(load, 0.0, None), 0.0)
-
-
-def momentum(v: np.ndarray) -> np.ndarray:
-    """Total momentum ``sum v``; shape (...)."""
-    return np.asarray(v, dtype=float).sum(axis=-1)
-
-
-def kinetic_energy(v: np.ndarray) -> np.ndarray:
-    """``sum v^2 / 2``; shape (...)."""
-    v = np.asarray(v, dtype=float)
-    return 0.5 * np.einsum("...i,...i->...", v, v)
-
-
-#: Contacts per block of ``potential_energy``: its temporaries stay small and reused.
-_BLOCK = 2**16
-
-
-def potential_energy(x: np.ndarray, alpha: float) -> np.ndarray:
-    """``sum c_+^(alpha+1) / (alpha+1)`` over contacts; shape (...).
-
-    By blocks of contacts, and the power only where c > 0: a snapshot of a long line
-    is mostly balls at rest, and a fractional power, like a fresh temporary as long
-    as the line, costs far more than the test.
-    """
-    x = np.asarray(x, dtype=float)
-    total = np.zeros(x.shape[:-1])
-    for i in range(0, x.shape[-1] - 1, _BLOCK):
-        c = compressions(x[..., i:i + _BLOCK + 1])
-        e = np.zeros_like(c)
-        np.power(c, alpha + 1.0, out=e, where=c > 0.0)
-        total += e.sum(axis=-1)
-    return total[()] / (alpha + 1.0)
+        delta = delta - gap
+    return contact_law(delta, stiffness, alpha, None if v is None else compressions(v),
+                       damping, damping_exponent)
 
 
 # --- contact laws of real spheres (SI) -------------------------------------------------------
@@ -97,18 +109,32 @@ def hertz_stiffness(young1, poisson1, radius1, young2, poisson2, radius2=np.inf)
     return 4.0 / 3.0 * e_star * np.sqrt(r_star)
 
 
-# --- the general line (``chainrun.solver.model.Line``), in its own units --------------------
+# --- energies and momentum of a line (``chainrun.solver.model.Line``), in its own units -----
+
+
+def _times_mass(a: np.ndarray, mass) -> np.ndarray:
+    """``a * mass`` by ball, ``a`` itself where every mass is 1."""
+    return a if np.all(np.asarray(mass) == 1.0) else a * mass
 
 
 def line_kinetic_energy(v: np.ndarray, mass: np.ndarray) -> np.ndarray:
-    """``sum m v^2 / 2``; v of shape (..., N)."""
+    """``sum m v^2 / 2``; v of shape (..., N), ``mass`` the line's (shape (N,))."""
     v = np.asarray(v, dtype=float)
-    return 0.5 * np.einsum("...i,i,...i->...", v, np.asarray(mass, dtype=float), v)
+    return 0.5 * np.sum(_times_mass(v * v, mass), axis=-1)
 
 
 def line_momentum(v: np.ndarray, mass: np.ndarray) -> np.ndarray:
-    """``sum m v``; v of shape (..., N)."""
-    return np.asarray(v, dtype=float) @ np.asarray(mass, dtype=float)
+    """``sum m v``; v of shape (..., N), ``mass`` the line's (shape (N,))."""
+    v = np.asarray(v, dtype=float)
+    return np.sum(_times_mass(v, mass), axis=-1)
+
+
+def impulse(line, t: float, walls: float = 0.0) -> float:
+    """The momentum the line gains by time ``t`` from its constant external forces,
+    its drives (forces prescribed in time) and its walls (``walls``: their impulses,
+    integrated along the run, as ``Solution.wall_impulse`` sums them)."""
+    drives = sum(float(d.integral(t)) for _, d in line.drives)
+    return float(np.sum(line.force)) * t + walls + drives
 
 
 def _law_energy(delta: np.ndarray, kappa, alpha) -> np.ndarray:
@@ -120,6 +146,31 @@ def _law_energy(delta: np.ndarray, kappa, alpha) -> np.ndarray:
     return np.asarray(kappa, dtype=float) * e / (np.asarray(alpha, dtype=float) + 1.0)
 
 
+#: Contacts per block of ``_one_law_energy``: its temporaries stay small and reused.
+_BLOCK = 2**16
+
+
+def _one_law_energy(x: np.ndarray, gap, kappa: float, alpha: float) -> np.ndarray:
+    """``kappa sum delta_+^(alpha+1) / (alpha+1)`` over the contacts between balls,
+    every one with the same law; shape (...).
+
+    By blocks of contacts, and the power only where delta > 0: a snapshot of a long
+    line is mostly balls at rest, and a fractional power, like a fresh temporary as long
+    as the line, costs far more than the test.
+    """
+    gapped = bool(np.any(gap != 0.0))
+    total = np.zeros(x.shape[:-1])
+    with np.errstate(invalid="ignore", over="ignore"):
+        for i in range(0, x.shape[-1] - 1, _BLOCK):
+            c = compressions(x[..., i:i + _BLOCK + 1])
+            if gapped:
+                c = c - gap[i:i + _BLOCK]
+            e = np.zeros_like(c)
+            np.power(c, alpha + 1.0, out=e, where=c > 0.0)
+            total += e.sum(axis=-1)
+    return kappa * total / (alpha + 1.0)
+
+
 def line_potential_energy(x: np.ndarray, line, t=None) -> np.ndarray:
     """Energy stored in the contacts (walls included), ``kappa delta_+^(alpha+1) /
     (alpha+1)`` with ``delta_j = x_j - x_{j+1} - g_j``, less the work ``sum f x`` of the
@@ -128,8 +179,12 @@ def line_potential_energy(x: np.ndarray, line, t=None) -> np.ndarray:
     the times ``t`` (shape (...)), which such a line needs (``Line.wall_displacement``);
     what the drives do is their work, not a potential."""
     x = np.asarray(x, dtype=float)
-    total = _law_energy(x[..., :-1] - x[..., 1:] - line.gap, line.stiffness,
-                        line.alpha).sum(axis=-1)
+    if _alike(line.stiffness) and _alike(line.alpha):
+        total = (_one_law_energy(x, line.gap, _first(line.stiffness), _first(line.alpha))
+                 if line.n > 1 else np.zeros(x.shape[:-1]))
+    else:
+        total = _law_energy(x[..., :-1] - x[..., 1:] - line.gap, line.stiffness,
+                            line.alpha).sum(axis=-1)
     moving = [w is not None and w.motion is not None for w in line.walls]
     if any(moving):
         if t is None:
@@ -143,7 +198,9 @@ def line_potential_energy(x: np.ndarray, line, t=None) -> np.ndarray:
     if line.right is not None:
         w = line.right
         total = total + _law_energy(x[..., -1] - wr - w.gap, w.stiffness, w.alpha)
-    return total - x @ line.force
+    if np.any(line.force != 0.0):
+        total = total - x @ line.force
+    return total[()]
 
 
 def baseline_energy(line) -> float:
@@ -163,3 +220,23 @@ def impact_energy(line) -> float:
     start = float(line_kinetic_energy(line.velocity, line.mass)
                   + line_potential_energy(line.position, line, 0.0))
     return start - baseline_energy(line)
+
+
+# --- the paper's line (unit masses and stiffnesses, no gap, wall or force) ------------------
+# The names the run files' writer and reader call for the paper's runs: the general
+# formulas of that line.
+
+
+def momentum(v: np.ndarray) -> np.ndarray:
+    """``line_momentum`` of unit masses; shape (...)."""
+    return line_momentum(v, 1.0)
+
+
+def kinetic_energy(v: np.ndarray) -> np.ndarray:
+    """``line_kinetic_energy`` of unit masses; shape (...)."""
+    return line_kinetic_energy(v, 1.0)
+
+
+def potential_energy(x: np.ndarray, alpha: float) -> np.ndarray:
+    """``line_potential_energy`` of unit stiffnesses, no gap, wall or force; shape (...)."""
+    return _one_law_energy(np.asarray(x, dtype=float), np.zeros(0), 1.0, float(alpha))[()]

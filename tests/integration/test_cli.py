@@ -236,13 +236,13 @@ def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
 
     calls = []
     monkeypatch.setattr(solver, "load_kernels", lambda: calls.append("load_kernels"))
-    real = solver.simulate_line
+    real = solver.simulate
 
-    def simulate_line(*args, **kwargs):
+    def simulate(*args, **kwargs):
         calls.append("simulate")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(solver, "simulate_line", simulate_line)
+    monkeypatch.setattr(solver, "simulate", simulate)
     (spec,) = parse_experiment('name = "x"\n[chain]\nn = 3\nk = 1\nalpha = 1.5\n',
                                "toml").runs()
     runner.simulate_run(spec, tmp_path)

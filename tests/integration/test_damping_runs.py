@@ -12,7 +12,7 @@ import pytest
 from helpers import simulate_text
 
 from chainrun.config import parse_experiment
-from chainrun.solver import simulate_line
+from chainrun.solver import simulate
 from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
 from chainrun.store import read_run
 
@@ -36,7 +36,7 @@ damping_law = "{law}"
 
 
 def _measured(line):
-    sol = simulate_line(line)
+    sol = simulate(line)
     assert sol.terminal
     v0 = line.velocity[0]
     return (sol.final_velocity[1] - sol.final_velocity[0]) / v0

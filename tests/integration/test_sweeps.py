@@ -60,9 +60,9 @@ PATIENCE = 600
 @pytest.fixture(scope="module")
 def warm_kernels():
     """Compile (or load) the solver's kernels once, before worker processes need them."""
-    from chainrun.solver import simulate
+    from chainrun.solver import Line, simulate
 
-    simulate(20, 2, 1.5, np.array([0.0, 1.0]))
+    simulate(Line.paper(20, 2, 1.5), np.array([0.0, 1.0]))
 
 
 def write(path: Path, text: str) -> Path:

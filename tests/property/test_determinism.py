@@ -27,7 +27,7 @@ import pytest
 from click.testing import CliRunner
 
 from chainrun.cli import main
-from chainrun.solver import Line, Wall, simulate, simulate_line
+from chainrun.solver import Line, Wall, simulate
 
 #: Attributes and datasets that record the time of writing or the cost of a run.
 VARYING = {"/@created", "/diagnostics@wall_time", "/table/wall_time"}
@@ -56,8 +56,8 @@ def same_bits(a, b) -> bool:
 @pytest.mark.parametrize("n, k, alpha", [(20, 2, 1.5), (10, 1, 1.0), (8, 3, 2.5)])
 def test_simulate_twice_is_bitwise_identical(n, k, alpha):
     times = np.linspace(0, 15, 31)
-    a = simulate(n, k, alpha, times)
-    b = simulate(n, k, alpha, times)
+    a = simulate(Line.paper(n, k, alpha), times)
+    b = simulate(Line.paper(n, k, alpha), times)
     assert a.outcome == b.outcome and a.end_time == b.end_time and a.message == b.message
     assert len(a.event_time) > 0
     for name in ("final_position", "final_velocity", "separation_time", "separation_velocity",
@@ -166,7 +166,7 @@ def _cpu_results() -> dict[str, np.ndarray]:
     their time t (L, T its length and time scales)."""
     out = {}
     for name, (line, kw) in _cpu_lines().items():
-        sol = simulate_line(line, **kw)
+        sol = simulate(line, **kw)
         assert sol.outcome.ok, f"{name}: {sol.message}"
         sc = line.scales()
         t = np.concatenate([[sol.end_time], sol.times])[:, None] / sc.time

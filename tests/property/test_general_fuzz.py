@@ -7,7 +7,7 @@ either side, elastic or damped; constant forces and a precompression, against a 
 or between two (with ``solver.t_end``); every damping law, given as a damping or as a
 restitution; in SI, materials and diameters. Each file is read as ``chainrun
 simulate`` reads it (``parse_experiment``), and its line run as a run runs it
-(``simulate_line`` with the file's settings), with snapshots.
+(``simulate`` with the file's settings), with snapshots.
 
 Every drawn file is valid, and every run must reach its terminal state or its
 ``t_end`` within ``TIME_BOUND`` seconds, or stop with a named outcome and a one-line
@@ -57,7 +57,7 @@ from hypothesis import strategies as st
 
 from chainrun.config import parse_experiment
 from chainrun.materials import MATERIALS
-from chainrun.solver import Outcome, simulate_line, velocity_floor
+from chainrun.solver import Outcome, simulate, velocity_floor
 from chainrun.solver.restitution import LAWS
 from reference import line_energy, reference_line
 
@@ -272,7 +272,7 @@ T_END = st.none() | st.floats(0.5, 60.0)
 # --- running and checking ----------------------------------------------------------------
 
 def run(spec, slowest: list):
-    """``simulate_line`` as a run of ``spec`` calls it, stopped after ``TIME_BOUND`` s;
+    """``simulate`` as a run of ``spec`` calls it, stopped after ``TIME_BOUND`` s;
     ``slowest[0]`` keeps the longest time a run took."""
     start = time.perf_counter()
 
@@ -280,8 +280,8 @@ def run(spec, slowest: list):
         if time.perf_counter() > start + TIME_BOUND:
             raise Deadline(f"still running at t = {t:.6g} after {TIME_BOUND} s")
 
-    sol = simulate_line(spec.line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
-                        max_events=spec.max_events, on_progress=hook)
+    sol = simulate(spec.line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
+                   max_events=spec.max_events, on_progress=hook)
     slowest[0] = max(slowest[0], time.perf_counter() - start)
     return sol
 

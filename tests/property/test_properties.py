@@ -12,8 +12,8 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from chainrun.solver import Outcome, simulate, velocity_floor
-from chainrun.solver.physics import kinetic_energy, momentum, potential_energy
+from chainrun.solver import Line, Outcome, simulate, velocity_floor
+from chainrun.solver.physics import line_kinetic_energy, line_momentum, line_potential_energy
 
 #: One table of tolerances for this file.
 TOL = {
@@ -39,7 +39,8 @@ def lines(draw):
 @given(lines())
 def test_terminal_state_and_conservation(line):
     n, k, alpha = line
-    sol = simulate(n, k, alpha)
+    paper = Line.paper(n, k, alpha)
+    sol = simulate(paper)
     where = f"N={n} K={k} alpha={alpha!r}: {sol.message}"
 
     # Outcome: the terminal state, reached.
@@ -51,11 +52,11 @@ def test_terminal_state_and_conservation(line):
     assert np.all(np.isfinite(v)) and np.all(np.isfinite(x)), where
 
     # Momentum: exactly K initially.
-    assert abs(momentum(v) - k) <= TOL["momentum"], where
+    assert abs(line_momentum(v, paper.mass) - k) <= TOL["momentum"], where
     assert sol.diagnostics.momentum_error <= TOL["momentum"], where
 
     # Energy: K/2 initially, recomputed here from the final state.
-    energy = kinetic_energy(v) + potential_energy(x, alpha)
+    energy = line_kinetic_energy(v, paper.mass) + line_potential_energy(x, paper)
     assert abs(energy - k / 2) <= TOL["energy"] * (k / 2), where
     assert sol.diagnostics.energy_error <= TOL["energy"], where
 

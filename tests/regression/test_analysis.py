@@ -32,6 +32,7 @@ import pytest
 from chainrun import artefacts
 from chainrun.analysis import analyze, derived, nesterenko
 from chainrun.analysis.paper import PRINTED, agrees, parse, render_note, tolerance
+from chainrun.solver import Line, simulate
 from chainrun.store import AnalysisData, read_analysis, read_run, write_analysis
 
 from helpers import FAST, ROOT
@@ -87,11 +88,44 @@ def test_exponential_and_power_fits_are_exact_on_exact_data():
 
 def test_rebound_shares_and_counts():
     v = np.array([-0.2, -0.05, -0.005, 0.0, 0.3, 0.9])
-    assert derived.count_significant(v, -1) == 2
-    assert derived.count_significant(v, +1) == 2
-    assert derived.rebound_energy_share(v) == pytest.approx(0.04 + 0.0025 + 0.000025)
-    assert derived.rebound_energy_share(v, k=2) == pytest.approx((0.04 + 0.0025 + 0.000025) / 2)
-    assert derived.rebound_momentum(v) == pytest.approx(-0.255)
+    ones = np.ones(v.size)
+    assert derived.count_significant(v, -1, 1.0) == 2
+    assert derived.count_significant(v, +1, 1.0) == 2
+    assert derived.rebound_energy_share(v, ones, 0.5) == pytest.approx(0.04 + 0.0025 + 0.000025)
+    assert derived.rebound_energy_share(v, ones, 1.0) == pytest.approx(
+        (0.04 + 0.0025 + 0.000025) / 2)
+    assert derived.rebound_momentum(v, ones) == pytest.approx(-0.255)
+
+
+def test_rebound_shares_weigh_the_lines_masses():
+    v = np.array([-0.2, -0.1, 0.3])
+    mass = np.array([3.0, 0.5, 2.0])
+    # 0.5 (3 x 0.04 + 0.5 x 0.01) of an impact energy of 0.25
+    assert derived.rebound_energy_share(v, mass, 0.25) == pytest.approx(0.25)
+    assert derived.rebound_momentum(v, mass) == pytest.approx(-0.65)
+    assert derived.count_significant(v, -1, 20.0) == 0   # 1% of 20 is 0.2
+
+
+def test_solitary_wave_of_a_line_in_its_own_units():
+    """A Hertz line of masses 2 and stiffnesses 3 struck at 0.5 is the paper's line in
+    its own scales (``Line.scales``): its solitary wave's energies, momentum, force,
+    speed and displacement are the paper's in those scales. Measured with unit masses
+    and stiffnesses, its energies and force would be off by factors of 2 and 3."""
+    n = 100
+    line = Line.make(n, mass=2.0, stiffness=3.0, alpha=1.5, speed=0.5)
+    sc = line.scales()
+    assert (sc.mass, sc.velocity) == (2.0, 0.5)
+    t = np.arange(1101) * 0.1
+    paper = derived.solitary_wave(simulate(Line.paper(n, 1, 1.5), t), (40.0, 80.0), (30, 80))
+    wave = derived.solitary_wave(simulate(line, t * sc.time),
+                                 (40.0 * sc.time, 80.0 * sc.time), (30, 80))
+    for name, unit in (("energy", sc.energy), ("kinetic_mean", sc.energy),
+                       ("potential_mean", sc.energy), ("momentum", sc.mass * sc.velocity),
+                       ("max_force", sc.force), ("max_velocity", sc.velocity),
+                       ("speed", 1.0 / sc.time), ("displacement", sc.length),
+                       ("width", 1.0)):
+        assert getattr(wave, name) == pytest.approx(getattr(paper, name) * unit, rel=1e-8), \
+            name
 
 
 def test_position_at_separation_is_exact_for_free_flight(built):

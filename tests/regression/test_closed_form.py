@@ -15,7 +15,7 @@ import time
 import numpy as np
 import pytest
 
-from chainrun.solver import EventKind, simulate_line
+from chainrun.solver import EventKind, simulate
 from chainrun.solver.model import Line, Wall
 from closed_forms import contact_duration, linear_pair, two_ball_velocities
 from reference import reference_line
@@ -31,7 +31,7 @@ TOL = {"exact": 1e-13, "reference": 1e-8}
 def test_a_meeting_after_a_gap_is_exact(m1, m2, k, u, alpha):
     g = 0.3
     line = Line.make(2, mass=[m1, m2], stiffness=k, alpha=alpha, speed=u, gap=g)
-    sol = simulate_line(line)
+    sol = simulate(line)
     assert sol.diagnostics.closed_form_collisions == 1
     assert sol.diagnostics.steps == 0
     np.testing.assert_allclose(sol.final_velocity, two_ball_velocities(m1, m2, u),
@@ -40,7 +40,7 @@ def test_a_meeting_after_a_gap_is_exact(m1, m2, k, u, alpha):
     assert list(sol.event_kind) == [EventKind.CLOSE, EventKind.OPEN]
     np.testing.assert_allclose(sol.event_time, [g / u, g / u + tc], rtol=TOL["exact"])
     # the integrated collision agrees to the integration's accuracy
-    slow = simulate_line(line, closed_form=False)
+    slow = simulate(line, closed_form=False)
     assert slow.diagnostics.closed_form_collisions == 0 and slow.diagnostics.steps > 0
     np.testing.assert_allclose(slow.final_velocity, sol.final_velocity, rtol=0,
                                atol=1e-10 * u)
@@ -51,8 +51,8 @@ def test_the_interior_of_a_sealed_linear_contact():
     tc = contact_duration(m1 * m2 / (m1 + m2), k, 1.0, u)
     inside = np.array([0.0, 1e-9, 0.3, 0.5, 0.77, 0.999999, 1.0]) * tc
     times = np.concatenate([[0.0, 0.1], g / u + inside, [g / u + 1.3 * tc, 9.0]])
-    sol = simulate_line(Line.make(2, mass=[m1, m2], stiffness=k, alpha=1.0, speed=u, gap=g),
-                        times)
+    sol = simulate(Line.make(2, mass=[m1, m2], stiffness=k, alpha=1.0, speed=u, gap=g),
+                   times)
     assert sol.diagnostics.closed_form_collisions == 1
     # the pair of closed_forms touches at t = 0 at x = 0: shift by the free flight
     x, v = linear_pair(np.maximum(times - g / u, 0.0), m1, m2, k, u)
@@ -69,8 +69,8 @@ def test_the_interior_of_a_sealed_linear_contact():
 def test_a_wall_bounce_is_exact(side, alpha):
     m, k, u, g = 1.7, 0.6, 0.9, 0.25
     sign = 1.0 if side == "right" else -1.0
-    sol = simulate_line(Line.make(1, mass=m, velocity=[sign * u],
-                                  **{side: Wall(k, alpha, g)}))
+    sol = simulate(Line.make(1, mass=m, velocity=[sign * u],
+                             **{side: Wall(k, alpha, g)}))
     assert sol.diagnostics.closed_form_collisions == 1
     assert sol.final_velocity[0] == pytest.approx(-sign * u, abs=TOL["exact"] * u)
     np.testing.assert_allclose(sol.event_time, [g / u, g / u + contact_duration(m, k, alpha, u)],
@@ -92,7 +92,7 @@ def third_ball_line(alpha):
 @pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0])
 def test_a_third_ball_reaching_a_sealed_contact(alpha):
     line = third_ball_line(alpha)
-    sol = simulate_line(line)
+    sol = simulate(line)
     ref = reference_line(line)
     assert sol.diagnostics.closed_form_collisions >= 1
     np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
@@ -111,7 +111,7 @@ def test_a_gas_of_balls_against_the_reference(seed):
     line = Line.make(n, mass=10.0 ** rng.uniform(-0.5, 0.5, n), alpha=rng.choice([1.0, 1.5]),
                      stiffness=10.0 ** rng.uniform(-0.5, 0.5, n - 1),
                      gap=rng.uniform(0.05, 1.0, n - 1), velocity=rng.uniform(-1.0, 1.0, n))
-    sol = simulate_line(line)
+    sol = simulate(line)
     ref = reference_line(line)
     assert sol.terminal and sol.diagnostics.closed_form_collisions > 0
     np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
@@ -131,8 +131,8 @@ def test_a_sensor_inside_sealed_contacts():
     # integrated contact's (to the integration's accuracy)
     line = Line.make(3, mass=[1.0, 2.0, 1.5], alpha=1.5, velocity=[1.0, 0.0, 0.0],
                      gap=[0.3, 5.0])
-    sol = simulate_line(line, sensors=[2], sensor_dt=0.01)
-    slow = simulate_line(line, sensors=[2], sensor_dt=0.01, closed_form=False)
+    sol = simulate(line, sensors=[2], sensor_dt=0.01)
+    slow = simulate(line, sensors=[2], sensor_dt=0.01, closed_form=False)
     assert sol.diagnostics.closed_form_collisions == 2
     assert slow.diagnostics.closed_form_collisions == 0
     assert np.abs(sol.sensor_force).max() > 0.5
@@ -146,7 +146,7 @@ def test_a_wall_contact_taken_back_into_the_integration(alpha):
     # the wall's impulse is what it gave before that instant and after it
     line = Line.make(3, alpha=alpha, velocity=[-1.0, 0.0, -5.0], gap=[1.0, 0.5],
                      left=Wall(1.0, 1.5, 0.05))
-    sol = simulate_line(line)
+    sol = simulate(line)
     ref = reference_line(line)
     assert sol.diagnostics.closed_form_collisions >= 1
     assert sol.diagnostics.momentum_error < 1e-12
@@ -188,7 +188,7 @@ def test_random_lines_against_walls_run_through(draw, closed_form):
         assert time.perf_counter() - start < 60.0, "no progress"
 
     t_end = None if line.has_terminal_state else 200.0
-    sol = simulate_line(line, t_end=t_end, closed_form=closed_form, on_progress=deadline)
+    sol = simulate(line, t_end=t_end, closed_form=closed_form, on_progress=deadline)
     assert sol.outcome.ok, sol.message
     assert sol.terminal is (t_end is None)
     # (an integrated contact conserves energy to its tolerance: 3e-11 over 176 events)
@@ -201,7 +201,7 @@ def test_a_run_ending_inside_a_wall_contact_counts_its_impulse():
     m, k, u, g = 1.3, 0.8, 0.7, 0.4
     line = Line.make(2, mass=[m, 2.0], velocity=[0.0, u], gap=[3.0], right=Wall(k, 1.5, g))
     tc = contact_duration(2.0, k, 1.5, u)
-    sol = simulate_line(line, t_end=g / u + 0.4 * tc)
+    sol = simulate(line, t_end=g / u + 0.4 * tc)
     assert sol.diagnostics.closed_form_collisions == 1
     p0 = float(np.sum(line.mass * line.velocity))
     p1 = float(np.sum(line.mass * sol.final_velocity))

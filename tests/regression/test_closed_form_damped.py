@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from chainrun.solver import EventKind, restitution, simulate_line
+from chainrun.solver import EventKind, restitution, simulate
 from chainrun.solver.model import Line, Wall
 from reference import reference_line
 
@@ -32,7 +32,7 @@ def test_a_damped_meeting_after_a_gap(m1, m2, k, u, eta, alpha, beta):
     g = 0.3
     line = Line.make(2, mass=[m1, m2], stiffness=k, alpha=alpha, speed=u, gap=g,
                      damping=eta, damping_exponent=beta)
-    sol = simulate_line(line)
+    sol = simulate(line)
     assert sol.diagnostics.closed_form_collisions == 1
     assert sol.diagnostics.steps == 0
     mu = m1 * m2 / (m1 + m2)
@@ -50,7 +50,7 @@ def test_a_damped_meeting_after_a_gap(m1, m2, k, u, eta, alpha, beta):
     assert sol.contact_dissipation[0] == pytest.approx(lost, rel=1e-10)
     assert sol.diagnostics.energy_error < 1e-12 and sol.diagnostics.momentum_error < 1e-13
     # the integrated collision agrees to the integration's accuracy
-    slow = simulate_line(line, closed_form=False)
+    slow = simulate(line, closed_form=False)
     assert slow.diagnostics.closed_form_collisions == 0 and slow.diagnostics.steps > 0
     np.testing.assert_allclose(slow.final_velocity, sol.final_velocity, rtol=0,
                                atol=1e-10 * u)
@@ -62,8 +62,8 @@ def test_a_damped_meeting_after_a_gap(m1, m2, k, u, eta, alpha, beta):
 def test_a_damped_wall_bounce(side):
     m, k, u, g, eta, beta = 1.7, 0.6, 0.9, 0.25, 0.4, 0.5
     sign = 1.0 if side == "right" else -1.0
-    sol = simulate_line(Line.make(1, mass=m, velocity=[sign * u],
-                                  **{side: Wall(k, 1.5, g, eta, beta)}))
+    sol = simulate(Line.make(1, mass=m, velocity=[sign * u],
+                             **{side: Wall(k, 1.5, g, eta, beta)}))
     assert sol.diagnostics.closed_form_collisions == 1
     e = restitution.restitution(eta, beta, k, 1.5, m, u)
     assert sol.final_velocity[0] == pytest.approx(-sign * e * u, abs=TOL["outcome"] * u)
@@ -86,8 +86,8 @@ def test_snapshots_inside_a_damped_contact():
     tu = restitution.contact_duration(0.7, 0.5, 1.3, 1.5, mu, 0.8)
     t0 = 0.4 / 0.8
     times = t0 + np.array([-0.1, 0.0, 0.1, 0.4, 0.7, 0.999, 1.0, 1.01, 1.1, 3.0]) * tu
-    sol = simulate_line(line, times)
-    slow = simulate_line(line, times, closed_form=False)
+    sol = simulate(line, times)
+    slow = simulate(line, times, closed_form=False)
     assert sol.diagnostics.closed_form_collisions == 1
     np.testing.assert_allclose(sol.positions, slow.positions, rtol=0, atol=1e-10)
     np.testing.assert_allclose(sol.velocities, slow.velocities, rtol=0, atol=1e-10)
@@ -108,7 +108,7 @@ def third_ball_line(gap):
 @pytest.mark.parametrize("gap,unloaded", [(0.6, False), (7.4, True)])
 def test_a_third_ball_reaching_a_damped_sealed_contact(gap, unloaded):
     line = third_ball_line(gap)
-    sol = simulate_line(line)
+    sol = simulate(line)
     ref = reference_line(line)
     assert sol.diagnostics.closed_form_collisions >= 1
     np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
@@ -121,7 +121,7 @@ def test_a_third_ball_reaching_a_damped_sealed_contact(gap, unloaded):
     unload = sol.event_time[pair][1]
     assert bool(unload < arrival) == unloaded
     assert arrival < 2.811
-    slow = simulate_line(line, closed_form=False)
+    slow = simulate(line, closed_form=False)
     np.testing.assert_allclose(sol.final_velocity, slow.final_velocity, rtol=0, atol=1e-9)
     assert sol.dissipated_energy == pytest.approx(slow.dissipated_energy, rel=1e-9)
     np.testing.assert_allclose(sol.contact_dissipation, slow.contact_dissipation, rtol=1e-8,
@@ -138,7 +138,7 @@ def test_a_damped_gas_against_the_reference(seed):
                      damping=rng.uniform(0.0, 0.5, n - 1) * (rng.random(n - 1) < 0.8),
                      damping_exponent=rng.choice([0.0, 0.5]),
                      left=Wall(1.0, 1.5, 0.3, 0.2, 0.5))
-    sol = simulate_line(line)
+    sol = simulate(line)
     ref = reference_line(line)
     assert sol.terminal and sol.diagnostics.closed_form_collisions > 0
     np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, rtol=0,
@@ -157,8 +157,8 @@ def test_a_damped_gas_against_the_reference(seed):
 def test_a_sensor_inside_damped_sealed_contacts():
     line = Line.make(3, mass=[1.0, 2.0, 1.5], alpha=1.5, velocity=[1.0, 0.0, 0.0],
                      gap=[0.3, 5.0], damping=0.5, damping_exponent=0.5)
-    sol = simulate_line(line, sensors=[2], sensor_dt=0.01)
-    slow = simulate_line(line, sensors=[2], sensor_dt=0.01, closed_form=False)
+    sol = simulate(line, sensors=[2], sensor_dt=0.01)
+    slow = simulate(line, sensors=[2], sensor_dt=0.01, closed_form=False)
     assert sol.diagnostics.closed_form_collisions == 2
     assert np.abs(sol.sensor_force).max() > 0.3
     np.testing.assert_allclose(sol.sensor_force, slow.sensor_force, rtol=0, atol=1e-9)
@@ -173,8 +173,8 @@ def test_a_run_ending_inside_a_damped_contact(fraction):
                      right=Wall(k, 1.5, g, 0.6, 0.5), damping=0.3, damping_exponent=0.5)
     tu = restitution.contact_duration(0.6, 0.5, k, 1.5, 2.0, u)
     t_end = g / u + fraction * tu
-    sol = simulate_line(line, t_end=t_end, times=[t_end])
-    slow = simulate_line(line, t_end=t_end, times=[t_end], closed_form=False)
+    sol = simulate(line, t_end=t_end, times=[t_end])
+    slow = simulate(line, t_end=t_end, times=[t_end], closed_form=False)
     assert sol.diagnostics.closed_form_collisions == 1
     assert sol.diagnostics.energy_error < 1e-12 and sol.diagnostics.momentum_error < 1e-13
     assert 0.0 < sol.dissipated_energy

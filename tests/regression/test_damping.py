@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from chainrun.solver import EventKind, Line, simulate_line
+from chainrun.solver import EventKind, Line, simulate
 from chainrun.solver.model import Wall
 from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
 
@@ -82,7 +82,7 @@ def _restitution(sol, v):
 def test_linear_dashpot_restitution_and_duration_are_the_closed_forms(m1, m2, kappa, eta, v):
     mu = m1 * m2 / (m1 + m2)
     e, duration = dashpot_collision(mu, kappa, eta, v)
-    sol = simulate_line(_pair(m1, m2, kappa, 1.0, eta, 0.0, v))
+    sol = simulate(_pair(m1, m2, kappa, 1.0, eta, 0.0, v))
     assert sol.terminal
     assert _restitution(sol, v) == pytest.approx(e, abs=1e-9)
     unload = sol.event_time[sol.event_kind == EventKind.UNLOAD]
@@ -102,7 +102,7 @@ def test_nonlinear_laws_restitution_and_duration_match_a_two_body_integration(al
     m1, m2, kappa, eta = 1.0, 1.7, 2.0, 0.4
     mu = m1 * m2 / (m1 + m2)
     e, duration = two_body(mu, kappa, alpha, eta, beta, v)
-    sol = simulate_line(_pair(m1, m2, kappa, alpha, eta, beta, v))
+    sol = simulate(_pair(m1, m2, kappa, alpha, eta, beta, v))
     assert _restitution(sol, v) == pytest.approx(e, abs=1e-8)
     unload = sol.event_time[sol.event_kind == EventKind.UNLOAD]
     assert unload[0] == pytest.approx(duration, rel=1e-8)
@@ -110,12 +110,12 @@ def test_nonlinear_laws_restitution_and_duration_match_a_two_body_integration(al
 
 def test_the_tsuji_exponent_gives_a_restitution_independent_of_the_speed():
     alpha = 1.5
-    es = [_restitution(simulate_line(_pair(1.0, 1.0, 1.0, alpha, 0.3, (alpha - 1) / 2, v)), v)
+    es = [_restitution(simulate(_pair(1.0, 1.0, 1.0, alpha, 0.3, (alpha - 1) / 2, v)), v)
           for v in (1e-3, 1e-1, 1.0, 10.0, 1e3)]
     assert np.ptp(es) < 1e-9
     assert 0.0 < es[0] < 1.0
     # and with Kuwabara-Kono's exponent it does depend on the speed
-    kk = [_restitution(simulate_line(_pair(1.0, 1.0, 1.0, alpha, 0.3, 0.5, v)), v)
+    kk = [_restitution(simulate(_pair(1.0, 1.0, 1.0, alpha, 0.3, 0.5, v)), v)
           for v in (1e-1, 10.0)]
     assert kk[0] > kk[1] + 0.01
 
@@ -124,7 +124,7 @@ def test_a_damped_wall_bounce_is_the_two_body_collision_with_the_ball_mass():
     m, kappa, eta, v = 0.7, 3.0, 0.5, 2.0
     line = Line.make(1, mass=m, velocity=[v],
                      right=Wall(kappa, alpha=1.0, damping=eta, damping_exponent=0.0))
-    sol = simulate_line(line)
+    sol = simulate(line)
     e, duration = dashpot_collision(m, kappa, eta, v)
     assert sol.terminal
     assert -sol.final_velocity[0] / v == pytest.approx(e, abs=1e-9)
@@ -144,7 +144,7 @@ def test_the_walls_impulses_are_integrated_on_elastic_lines_too(alpha):
                      right=Wall(1e4, alpha=alpha, gap=0.5))
     # it meets the right wall at t = 0.625 and the left one at 1.875, each contact
     # lasting under 0.1 (stiff walls): by t = 2.5 it has bounced once off each
-    sol = simulate_line(line, t_end=2.5)
+    sol = simulate(line, t_end=2.5)
     assert sol.wall_impulse == pytest.approx([2 * m * v, -2 * m * v], rel=1e-10)
     assert sol.final_velocity[0] == pytest.approx(v, rel=1e-10)
     assert sol.diagnostics.momentum_error < 1e-12
@@ -172,7 +172,7 @@ def test_energy_balance_on_random_damped_lines(seed):
     rng = np.random.default_rng(seed)
     line = _random_damped_line(rng, int(rng.integers(3, 9)))
     times = np.linspace(0.0, 20.0, 41)
-    sol = simulate_line(line, times, t_end=40.0)
+    sol = simulate(line, times, t_end=40.0)
     e0 = float(line_kinetic_energy(line.velocity, line.mass))
     for x, v, d in zip(sol.positions, sol.velocities, sol.dissipated):
         e = float(line_kinetic_energy(v, line.mass) + line_potential_energy(x, line))
@@ -191,7 +191,7 @@ def test_every_damped_collision_unloads_before_it_opens():
     n = 8
     line = Line.make(n, mass=rng.uniform(0.5, 2.0, n), alpha=1.5, damping=0.2,
                      damping_exponent=0.25)
-    sol = simulate_line(line)
+    sol = simulate(line)
     assert sol.terminal
     for j in range(n - 1):
         kinds = sol.event_kind[sol.event_contact == j]
@@ -204,9 +204,9 @@ def test_every_damped_collision_unloads_before_it_opens():
 def test_the_elastic_limit():
     n = 6
     base = dict(mass=[1.0, 2.0, 0.5, 1.0, 1.5, 1.0], alpha=1.5, k=2)
-    elastic = simulate_line(Line.make(n, **base))
+    elastic = simulate(Line.make(n, **base))
     for eta in (1e-4, 1e-6):
-        damped = simulate_line(Line.make(n, damping=eta, damping_exponent=0.5, **base))
+        damped = simulate(Line.make(n, damping=eta, damping_exponent=0.5, **base))
         gap = np.abs(damped.final_velocity - elastic.final_velocity).max()
         assert gap < 50 * eta
         assert 0.0 < damped.dissipated_energy < 50 * eta
@@ -221,7 +221,7 @@ def test_sensor_forces_are_the_damped_law_at_the_snapshots():
                      damping_exponent=0.5, k=1)
     dt = 0.25
     times = np.arange(0.0, 12.0, dt)
-    sol = simulate_line(line, times, sensors=[2, 4], sensor_dt=dt)
+    sol = simulate(line, times, sensors=[2, 4], sensor_dt=dt)
     from chainrun.solver.physics import contact_forces
 
     forces = contact_forces(sol.positions, line.alpha, line.stiffness, v=sol.velocities,
@@ -246,7 +246,7 @@ def test_a_heavily_damped_line_ends_moving_as_one_body(alpha, beta):
     heavy damping every collision is nearly perfectly inelastic, and the line ends
     moving nearly as one body, with the momentum it was given."""
     n, k = 10, 2
-    sol = simulate_line(Line.make(n, alpha=alpha, damping=1e3, damping_exponent=beta, k=k))
+    sol = simulate(Line.make(n, alpha=alpha, damping=1e3, damping_exponent=beta, k=k))
     assert sol.terminal
     v = sol.final_velocity
     assert np.all(np.diff(v) >= 0.0)
@@ -267,7 +267,7 @@ def test_damped_lines_against_the_reference_solver(seed):
     line = _random_damped_line(rng, int(rng.integers(2, 7)))
     times = np.linspace(0.0, 8.0, 9)
     ref = reference_line(line, times=times, t_max=200.0)
-    sol = simulate_line(line, times)
+    sol = simulate(line, times)
     assert ref.terminal and sol.terminal
     scale = float(np.max(np.abs(line.velocity)))
     np.testing.assert_allclose(sol.final_velocity, ref.final_velocity, atol=1e-9 * scale)
@@ -304,7 +304,7 @@ def test_a_load_that_touches_zero_and_rises_reloads():
 
     path = Path(__file__).resolve().parents[2] / "configs" / "gallery" / "wall-column-damped.toml"
     spec = next(s for s in load_experiment(path).runs() if s.n == 12)
-    sol = simulate_line(spec.line, max_events=1000)
+    sol = simulate(spec.line, max_events=1000)
     assert sol.terminal
     kinds = sol.event_kind[sol.event_contact == 0]
     assert EventKind.RELOAD in kinds
@@ -322,7 +322,7 @@ def test_a_load_that_vanishes_with_the_compression_opens_the_contact():
     for a step to find, the cluster's steps grew without end, and the run ended
     non-finite at t = 8.5e307."""
     line = Line.make(1000, k=80, alpha=1.5, damping=0.01, damping_exponent=0.5)
-    sol = simulate_line(line, closed_form=False)
+    sol = simulate(line, closed_form=False)
     assert sol.terminal, sol.message
     pair = sol.event_contact == 258
     kinds, times = sol.event_kind[pair], sol.event_time[pair]

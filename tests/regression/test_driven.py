@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from chainrun.solver import Drive, Line, Wall, simulate_line
+from chainrun.solver import Drive, Line, Wall, simulate
 from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
 
 
@@ -43,7 +43,7 @@ def test_a_ball_between_a_driven_linear_wall_and_a_fixed_one(frequency):
                      left=Wall(k1, 1.0, -d, motion=Drive.sine(a, frequency)),
                      right=Wall(k2, 1.0, -k1 * d / k2))
     t = np.linspace(0.0, 60.0, 121)
-    sol = simulate_line(line, t, t_end=60.0)
+    sol = simulate(line, t, t_end=60.0)
     w, big = 2 * math.pi * frequency, math.sqrt((k1 + k2) / m)
     b = k1 * a / (m * (big**2 - w**2))
     x = b * (np.sin(w * t) - w / big * np.sin(big * t))
@@ -66,7 +66,7 @@ def test_a_ball_held_by_precompression_against_a_driven_wall_with_a_ramp():
                      position=[-f0 / k], velocity=[0.0],
                      left=Wall(k, 1.0, 0.0, motion=Drive.sine(a, f, ramp)))
     t = np.linspace(0.0, 20.0, 41)
-    sol = simulate_line(line, t, t_end=20.0)
+    sol = simulate(line, t, t_end=20.0)
     big = math.sqrt(k / m)
     drive = line.left.motion
     y = np.array([big * quad(lambda s: math.sin(big * (tt - s)) * float(drive(s)), 0.0, tt,
@@ -158,7 +158,7 @@ def test_a_small_driven_hertz_line_against_scipy():
                           dict(amplitude=0.01, frequency=0.4)])),
                      right=Wall(1.0, 1.5, 0.01))
     t = np.linspace(0.0, 40.0, 81)
-    sol = simulate_line(line, t, t_end=40.0)
+    sol = simulate(line, t, t_end=40.0)
     x, v = scipy_line(line, t, 40.0)
     assert sol.event_time.size >= 10  # the balls leave the walls and each other
     np.testing.assert_allclose(sol.positions, x, rtol=0, atol=1e-8 * np.abs(x).max())
@@ -174,7 +174,7 @@ def test_a_force_in_time_on_a_ball_against_scipy():
                      drives=[(1, Drive.sine(0.02, 0.3, ramp=2.0)),
                              (2, Drive.sine(0.01, 0.05))])
     t = np.linspace(0.0, 30.0, 61)
-    sol = simulate_line(line, t, t_end=30.0)
+    sol = simulate(line, t, t_end=30.0)
     x, v = scipy_line(line, t, 30.0)
     assert sol.event_time.size >= 2
     np.testing.assert_allclose(sol.positions, x, rtol=0, atol=1e-8 * np.abs(x).max())
@@ -206,7 +206,7 @@ def test_energy_balance_with_the_drives_work_on_damped_lines(case):
                                                 motion=Drive.sine(0.005, 0.12)),
                          right=Wall(1.0, 1.0, -0.01, motion=Drive.sine(0.003, 0.31, 1.0)))
     t = np.linspace(0.0, 40.0, 161)
-    sol = simulate_line(line, t, t_end=40.0)
+    sol = simulate(line, t, t_end=40.0)
     assert sol.outcome.ok and sol.dissipated[-1] > 0.0 and np.any(sol.drive_work)
     assert balance(line, sol) < 1e-10
     assert sol.diagnostics.energy_error < 1e-10
@@ -234,8 +234,8 @@ def test_a_spline_through_samples_of_a_sine_drives_as_the_sine():
     np.testing.assert_allclose(spline(fine), CubicSpline(
         samples, a * np.sin(2 * np.pi * f * samples))(fine), rtol=0, atol=1e-16)
     t = np.linspace(0.0, last, 81)
-    by_file = simulate_line(line(spline), t, t_end=last)
-    by_sine = simulate_line(line(Drive.sine(a, f)), t, t_end=last)
+    by_file = simulate(line(spline), t, t_end=last)
+    by_sine = simulate(line(Drive.sine(a, f)), t, t_end=last)
     # a wall off by at most `gap` moves the balls by about as much (off resonance)
     np.testing.assert_allclose(by_file.positions, by_sine.positions, rtol=0, atol=100 * gap)
     assert balance(line(spline), by_file) < 1e-10
@@ -252,7 +252,7 @@ def test_a_breakpoint_ends_a_step():
     line = Line.make(1, mass=m, k=0, stiffness=[], alpha=[], gap=[],
                      left=Wall(k, 1.0, -d, motion=drive), right=Wall(k, 1.0, -d))
     t = np.linspace(0.0, 8.0, 33)
-    sol = simulate_line(line, t, t_end=8.0)
+    sol = simulate(line, t, t_end=8.0)
     # x'' + 2 x = w(t) (k = m = 1): with w = c t^3, a particular solution is
     # c (t^3 / 2 - 3 t / 2); then, with w = c T^3 held, x = c T^3 / 2 + free oscillation
     c, big = 1e-3, math.sqrt(2.0)
@@ -294,7 +294,7 @@ def test_a_line_between_walls_driven_at_a_mode_grows_without_bound():
         line = Line.make(n, mass=1.0, stiffness=1.0, alpha=1.0, gap=-d, k=0,
                          left=Wall(1.0, 1.0, -d, motion=Drive.sine(a, w / (2 * math.pi))),
                          right=Wall(1.0, 1.0, -d))
-        sol = simulate_line(line, t, t_end=400.0)
+        sol = simulate(line, t, t_end=400.0)
         # x'' + K x = e_1 a sin(w t): mode j gets q_j'' + W_j^2 q_j = phi_j1 a sin(w t)
         x = np.zeros((t.size, n))
         for wj, phi in zip(np.sqrt(values), vectors.T):
@@ -333,7 +333,7 @@ def test_a_precompressed_chain_driven_above_its_cutoff_decays_at_the_linear_rate
                                      right=Wall(1.0, 1.5)), f0)
         t_end = ramp + 20 * period
         t = np.linspace(ramp, t_end, 801)
-        sol = simulate_line(line, t, t_end=t_end)
+        sol = simulate(line, t, t_end=t_end)
         amp = np.abs(sol.positions - line.position).max(axis=0)
         reach[ratio] = amp / a
         if ratio > 1.0:

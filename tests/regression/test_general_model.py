@@ -1,4 +1,4 @@
-"""Tests of ``chainrun.solver.simulate_line`` on the general line model.
+"""Tests of ``chainrun.solver.simulate`` on the general line model.
 
 Masses, per-contact stiffnesses and exponents, gaps and overlaps, initial positions,
 external forces and walls (``chainrun.solver.model.Line``), in the line's own units.
@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from chainrun.solver import EventKind, Line, Outcome, Wall, simulate, simulate_line
+from chainrun.solver import EventKind, Line, Outcome, Wall, simulate
 from closed_forms import (
     contact_duration,
     linear_pair,
@@ -23,7 +23,7 @@ from closed_forms import (
     steel_bead,
     two_ball_velocities,
 )
-from reference import FAMILIES, line_energy, random_line, reference_line, reference_solve
+from reference import FAMILIES, line_energy, paper_line, random_line, reference_line
 
 #: One table of tolerances for this file. Lines here have speeds, masses and
 #: durations of order 1 (the SI chain is compared in its own units), so the
@@ -55,7 +55,7 @@ TOL = {
 
 
 def run(line: Line, times=(), **kw):
-    return simulate_line(line, times, **kw)
+    return simulate(line, times, **kw)
 
 
 @functools.lru_cache(maxsize=None)
@@ -404,11 +404,12 @@ def test_scaling_striker_speed(s, alpha):
 def test_steel_chain_in_si_units(n):
     # 25.4 mm steel beads (E = 200 GPa, nu = 0.3, rho = 7850 kg/m^3) struck at 0.5 m/s:
     # in the paper's units (mass m, time (m / (kappa u^(1/2)))^(2/5), speed u) this is
-    # the paper's line, so velocities are 0.5 x simulate(n, 1, 1.5) and times scale.
+    # the paper's line, so velocities are 0.5 x those of Line.paper(n, 1, 1.5) and
+    # times scale.
     u = 0.5
     mass, kappa = steel_bead()
     sol = run(Line.make(n, mass=mass, stiffness=kappa, alpha=1.5, speed=u))
-    paper = simulate(n, 1, 1.5)
+    paper = simulate(Line.paper(n, 1, 1.5))
     assert_ok(sol, terminal=True)
     np.testing.assert_allclose(sol.final_velocity, u * paper.final_velocity, rtol=0,
                                atol=TOL["si"] * u)
@@ -417,7 +418,7 @@ def test_steel_chain_in_si_units(n):
     np.testing.assert_allclose(sol.final_position, paper.final_position * u * t_unit,
                                rtol=0, atol=TOL["si"] * u * t_unit * (1 + paper.end_time))
     if n <= 10:   # and the reference, for chainrun's paper run
-        r = reference_solve(n, 1, 1.5)
+        r = reference_line(paper_line(n, 1, 1.5))
         np.testing.assert_allclose(sol.final_velocity, u * r.final_velocity, rtol=0,
                                    atol=TOL["reference_velocity"] * u)
 

@@ -3,8 +3,9 @@
 ``reference_line`` is the second opinion on chainrun's general kernels (masses,
 stiffnesses, exponents, gaps, positions, forces, walls), so it is checked here only
 against evidence that owes nothing to either: closed forms (``closed_forms.py``),
-scaling laws of the equations, conservation laws, its own paper-units twin
-``reference_solve``, and its convergence in the step tolerance.
+scaling laws of the equations, conservation laws, the paper's line given as
+``chainrun.solver.model.Line`` and as the reference's own record (``paper_line``),
+and its convergence in the step tolerance.
 """
 
 from __future__ import annotations
@@ -34,8 +35,8 @@ from reference import (
     _closing_time,
     line_energy,
     random_line,
+    paper_line,
     reference_line,
-    reference_solve,
 )
 
 #: One table of tolerances for this file, relative to the line's speed (velocities),
@@ -86,13 +87,13 @@ def test_duration_constants():
         HERTZ_DURATION * (mu / k) ** 0.4 * u ** -0.2, rel=1e-14)
 
 
-# ---- the paper's line: the general path reproduces reference_solve -----------------------
+# ---- the paper's line: chainrun's Line.paper and the reference's own record run alike ----
 @pytest.mark.parametrize(("n", "k", "alpha"), [
     (2, 1, 1.0), (5, 1, 1.5), (5, 3, 1.5), (8, 3, 2.5), (6, 2, 1.0), (3, 3, 1.5),
     (1, 1, 1.5),
 ])
-def test_paper_line_matches_reference_solve(n, k, alpha):
-    a, b = reference_line(Line.paper(n, k, alpha)), reference_solve(n, k, alpha)
+def test_paper_line_runs_as_the_references_own_record(n, k, alpha):
+    a, b = reference_line(Line.paper(n, k, alpha)), reference_line(paper_line(n, k, alpha))
     assert a.terminal and b.terminal
     assert a.units == (1.0, 1.0, 1.0)
     np.testing.assert_allclose(a.final_velocity, b.final_velocity, rtol=0, atol=1e-14)
@@ -301,7 +302,7 @@ def test_steel_chain_in_si_units():
     n, u = 6, 0.5
     mass, kappa = steel_bead()
     r = reference_line(Line.make(n, mass=mass, stiffness=kappa, alpha=1.5, speed=u))
-    p = reference_solve(n, 1, 1.5)
+    p = reference_line(paper_line(n, 1, 1.5))
     np.testing.assert_allclose(r.final_velocity, u * p.final_velocity, rtol=0,
                                atol=TOL["si"] * u)
     # time unit (m / (kappa u^(1/2)))^(2/5) = 3.3e-5 s for these beads

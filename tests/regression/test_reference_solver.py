@@ -14,7 +14,7 @@ from decimal import Decimal
 import numpy as np
 import pytest
 
-from reference import CLOSE, OPEN, reference_solve
+from reference import CLOSE, OPEN, paper_line, reference_line
 
 #: One table of tolerances for this file.
 TOL = {
@@ -35,8 +35,8 @@ SQRT2 = np.sqrt(2.0)
 def ref(n: int, k: int, alpha: float, rtol: float | None = None):
     """Cached reference run."""
     if rtol is None:
-        return reference_solve(n, k, alpha)
-    return reference_solve(n, k, alpha, rtol=rtol)
+        return reference_line(paper_line(n, k, alpha))
+    return reference_line(paper_line(n, k, alpha), rtol=rtol)
 
 
 # --------------------------------------------------------------------------------------
@@ -92,7 +92,7 @@ def closed_form_two_balls(t):
 
 
 def test_two_balls_linear_closed_form():
-    r = reference_solve(2, 1, 1.0)
+    r = reference_line(paper_line(2, 1, 1.0))
     assert r.terminal
     np.testing.assert_allclose(r.final_velocity, [0.0, 1.0], rtol=0,
                                atol=TOL["closed_form_velocity"])
@@ -106,7 +106,7 @@ def test_two_balls_linear_closed_form():
 @pytest.mark.parametrize("alpha", [1.0, 1.25, 1.5, 2.0, 2.5, 3.0])
 def test_two_balls_exchange_velocities(alpha):
     # Equal masses, elastic: any contact law exchanges the velocities.
-    r = reference_solve(2, 1, alpha)
+    r = reference_line(paper_line(2, 1, alpha))
     np.testing.assert_allclose(r.final_velocity, [0.0, 1.0], rtol=0, atol=TOL["exchange"])
     np.testing.assert_allclose(r.separation_velocity, [0.0, 1.0], rtol=0,
                                atol=TOL["exchange"])
@@ -114,7 +114,7 @@ def test_two_balls_exchange_velocities(alpha):
 
 def test_closing_from_a_gap_linear():
     # Ball 2 starts 0.5 ahead: contact closes at t = 0.5, then the closed form.
-    r = reference_solve(2, 1, 1.0, initial=([0.0, 0.5], [1.0, 0.0]))
+    r = reference_line(paper_line(2, 1, 1.0, initial=([0.0, 0.5], [1.0, 0.0])))
     assert list(r.event_kind) == [CLOSE, OPEN]
     np.testing.assert_allclose(r.event_time, [0.5, 0.5 + np.pi / SQRT2], rtol=0,
                                atol=TOL["closed_form_time"])
@@ -125,7 +125,7 @@ def test_closing_from_a_gap_linear():
 @pytest.mark.parametrize("alpha", [1.0, 1.5, 3.0])
 def test_separated_balls_pass_the_velocity_on(alpha):
     # Three separated balls: two binary collisions, each exchanging velocities.
-    r = reference_solve(3, 1, alpha, initial=([0.0, 0.5, 5.0], [1.0, 0.0, 0.0]))
+    r = reference_line(paper_line(3, 1, alpha, initial=([0.0, 0.5, 5.0], [1.0, 0.0, 0.0])))
     assert r.terminal
     assert list(r.event_kind) == [CLOSE, OPEN, CLOSE, OPEN]
     assert list(r.event_contact) == [0, 0, 1, 1]
@@ -207,8 +207,8 @@ def test_events_at_zero_compression_and_alternating():
 
 
 def test_trivial_lines():
-    r = reference_solve(1, 1, 1.5)
+    r = reference_line(paper_line(1, 1, 1.5))
     assert r.terminal and r.end_time == 0.0 and r.final_velocity.tolist() == [1.0]
-    r = reference_solve(2, 2, 1.5)
+    r = reference_line(paper_line(2, 2, 1.5))
     assert r.terminal and r.end_time == 0.0 and len(r.event_time) == 0
     assert r.final_velocity.tolist() == [1.0, 1.0]

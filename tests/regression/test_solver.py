@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from chainrun.solver import EventKind, Outcome, simulate
+from chainrun.solver import EventKind, Line, Outcome, simulate
 from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
-from reference import reference_solve
+from reference import paper_line, reference_line
 
 #: One table of tolerances for this file.
 TOL = {
@@ -46,13 +46,13 @@ def printed_tolerance(text: str, units: float = 0.5) -> float:
 @functools.lru_cache(maxsize=None)
 def run(n: int, k: int, alpha: float):
     """Cached ``simulate`` run to the terminal state, no snapshots."""
-    return simulate(n, k, alpha)
+    return simulate(Line.paper(n, k, alpha))
 
 
 @functools.lru_cache(maxsize=None)
 def ref(n: int, k: int, alpha: float):
     """Cached reference run."""
-    return reference_solve(n, k, alpha)
+    return reference_line(paper_line(n, k, alpha))
 
 
 def assert_terminal(sol):
@@ -109,7 +109,7 @@ def closed_form_two_balls(t):
 
 
 def test_two_balls_linear_final_state():
-    sol = simulate(2, 1, 1.0)
+    sol = simulate(Line.paper(2, 1, 1.0))
     assert_terminal(sol)
     np.testing.assert_allclose(sol.final_velocity, [0.0, 1.0], rtol=0,
                                atol=TOL["closed_form_velocity"])
@@ -125,7 +125,7 @@ def test_two_balls_linear_final_state():
 
 def test_two_balls_linear_snapshots():
     times = np.array([0.0, 0.1, 0.5, 1.0, 1.7, 2.0, 2.2, 3.0, 10.0])
-    sol = simulate(2, 1, 1.0, times)
+    sol = simulate(Line.paper(2, 1, 1.0), times)
     assert_terminal(sol)
     x, v = closed_form_two_balls(times)
     np.testing.assert_array_equal(sol.times, times)
@@ -140,7 +140,7 @@ def test_two_balls_linear_snapshot_hook():
     def hook(i, t, x, v):
         got[i] = (t, x.copy(), v.copy())
 
-    sol = simulate(2, 1, 1.0, times, on_snapshot=hook)
+    sol = simulate(Line.paper(2, 1, 1.0), times, on_snapshot=hook)
     assert sol.positions is None and sol.velocities is None
     x, v = closed_form_two_balls(times)
     assert sorted(got) == [0, 1, 2]
@@ -186,7 +186,7 @@ def test_events_against_reference(n, k, alpha):
 # ---- 4. Trivial lines -------------------------------------------------------------------
 @pytest.mark.parametrize("alpha", [1.0, 1.5])
 def test_one_ball_flies(alpha):
-    sol = simulate(1, 1, alpha, [0.0, 2.5])
+    sol = simulate(Line.paper(1, 1, alpha), [0.0, 2.5])
     assert_terminal(sol)
     assert sol.end_time == 0.0
     assert sol.final_velocity.tolist() == [1.0]
@@ -197,7 +197,7 @@ def test_one_ball_flies(alpha):
 
 @pytest.mark.parametrize("alpha", [1.0, 1.5, 3.0])
 def test_whole_line_moving_nothing_happens(alpha):
-    sol = simulate(2, 2, alpha, [0.0, 4.0])
+    sol = simulate(Line.paper(2, 2, alpha), [0.0, 4.0])
     assert_terminal(sol)
     assert sol.end_time == 0.0
     assert len(sol.event_time) == 0
@@ -256,7 +256,7 @@ def test_events_located_at_zero_compression(n, k, alpha):
     located = np.isin(first.event_kind, [EventKind.OPEN, EventKind.CLOSE])
     t_ev = first.event_time[located]
     j_ev = first.event_contact[located]
-    second = simulate(n, k, alpha, t_ev)
+    second = simulate(Line.paper(n, k, alpha), t_ev)
     assert_terminal(second)
     c = compressions(second.positions)[np.arange(t_ev.size), j_ev]
     bad = np.abs(c) >= TOL["compression_at_event"]
@@ -268,7 +268,7 @@ def test_events_located_at_zero_compression(n, k, alpha):
 def test_snapshots_do_not_change_the_run(n, k, alpha):
     # Snapshots are interpolated within steps, so asking for them changes nothing.
     first = run(n, k, alpha)
-    second = simulate(n, k, alpha, np.linspace(0.0, 2 * first.end_time, 37))
+    second = simulate(Line.paper(n, k, alpha), np.linspace(0.0, 2 * first.end_time, 37))
     np.testing.assert_array_equal(second.event_time, first.event_time)
     np.testing.assert_array_equal(second.final_velocity, first.final_velocity)
 
@@ -296,7 +296,7 @@ def test_default_accuracy_against_converged(n, k, alpha):
     orders of magnitude smaller (the error falls linearly with rtol); N = 100, K = 3
     includes the late catch-up collisions up to t ~ 2e6.
     """
-    converged = simulate(n, k, alpha, rtol=1e-15)
+    converged = simulate(Line.paper(n, k, alpha), rtol=1e-15)
     default = run(n, k, alpha)
     assert_terminal(converged)
     assert_terminal(default)
@@ -307,7 +307,7 @@ def test_default_accuracy_against_converged(n, k, alpha):
 def test_tightest_tolerance_runs_to_the_end():
     """At rtol = 1e-15 the floor's compression is below the rounding of the positions;
     contacts opened within rounding must not flip back and forth."""
-    sol = simulate(200, 1, 1.0, rtol=1e-15)
+    sol = simulate(Line.paper(200, 1, 1.0), rtol=1e-15)
     assert_terminal(sol)
     assert sol.diagnostics.momentum_error < 1e-12
 

@@ -232,9 +232,9 @@ def test_one_ball_against_a_wall_needs_only_the_walls_exponent():
     assert spec.line.right == Wall(1.0, 1.0, 0.5) and spec.line.alpha.size == 0
     assert spec.alpha == 1.0
     # linear wall: it comes back at its speed after half a period, pi
-    from chainrun.solver import simulate_line
+    from chainrun.solver import simulate
 
-    sol = simulate_line(spec.line)
+    sol = simulate(spec.line)
     assert sol.terminal and sol.final_velocity[0] == pytest.approx(-1.0, abs=1e-12)
     assert sol.end_time == pytest.approx(0.5 + math.pi, abs=1e-10)
 
@@ -441,10 +441,10 @@ def test_example_configs(config, tmp_path):
     specs = load_experiment(config).runs()
     for spec in specs:
         assert spec.line.n == spec.n
-    from chainrun.solver import simulate_line
+    from chainrun.solver import simulate
 
     spec = specs[0]
-    sol = simulate_line(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
+    sol = simulate(spec.line, spec.times[:2], t_end=spec.t_end, max_events=10**6)
     assert sol.outcome.ok
 
 

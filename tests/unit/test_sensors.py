@@ -10,8 +10,8 @@ import chainrun
 from chainrun.analysis import derived
 from chainrun.config import parse_experiment
 from chainrun.errors import ConfigError
-from chainrun.solver import simulate
-from chainrun.solver.physics import contact_forces
+from chainrun.solver import Line, simulate
+from chainrun.solver.physics import line_contact_forces
 from chainrun.store import read_run
 
 
@@ -21,13 +21,13 @@ def test_samples_are_the_forces_of_snapshots_at_the_same_times(alpha, k):
     the force computed from a full snapshot at that time, bitwise: both come from the
     step that contains the instant."""
     n, dt = 30, 0.25
-    sol = simulate(n, k, alpha, sensors=[1, 12, n], sensor_dt=dt)
+    sol = simulate(Line.paper(n, k, alpha), sensors=[1, 12, n], sensor_dt=dt)
     assert sol.sensor_time[0] == 0.0 and sol.sensor_time[-1] <= sol.end_time
     assert sol.end_time - sol.sensor_time[-1] < dt
     np.testing.assert_array_equal(sol.sensor_time, dt * np.arange(sol.sensor_time.size))
-    snap = simulate(n, k, alpha, sol.sensor_time)
+    snap = simulate(Line.paper(n, k, alpha), sol.sensor_time)
     np.testing.assert_array_equal(snap.final_velocity, sol.final_velocity)
-    forces = contact_forces(snap.positions, alpha)              # (M, n - 1)
+    forces = line_contact_forces(snap.positions, snap.line)     # (M, n - 1)
     np.testing.assert_array_equal(sol.sensor_force[:, 1, 0], forces[:, 10])
     np.testing.assert_array_equal(sol.sensor_force[:, 1, 1], forces[:, 11])
     np.testing.assert_array_equal(sol.sensor_force[:, 0, 0], 0.0)   # ball 1: no left contact
@@ -78,7 +78,7 @@ def test_sensor_keys_are_checked_with_the_key_named():
     assert (spec.sensors, spec.sensor_dt, spec.sensor_end) == ((2, 5), 0.1, 3.0)
     assert spec.sensor_samples == 31 * 2  # t = 0, 0.1, ..., 3.0 on two balls
     with pytest.raises(ValueError, match="sensor_dt"):
-        simulate(5, 1, 1.5, sensors=[2])
+        simulate(Line.paper(5, 1, 1.5), sensors=[2])
 
 
 def test_sensors_stop_where_the_file_says_and_are_counted_before_the_run():
@@ -111,7 +111,7 @@ def test_sensors_stop_where_the_file_says_and_are_counted_before_the_run():
                 parse_experiment(base + text, "toml")
             assert want in str(exc.value), text
             assert len(str(exc.value).splitlines()) == 1
-    sol = simulate(5, 1, 1.5, sensors=[2], sensor_dt=0.1, sensor_end=1.55)
+    sol = simulate(Line.paper(5, 1, 1.5), sensors=[2], sensor_dt=0.1, sensor_end=1.55)
     np.testing.assert_allclose(sol.sensor_time, 0.1 * np.arange(16))
     assert sol.end_time > 3.0  # the run goes on; its sensors stopped
 
