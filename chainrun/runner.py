@@ -1,7 +1,7 @@
 """Runs experiments: each RunSpec through the solver into its run file, then the index.
 
-This module owns the layout of an experiment's output folder and how a sweep is
-executed::
+This module owns how a sweep is executed, into an experiment's output folder
+(``chainrun.paths``)::
 
     OUTDIR/<run_id>.h5     one run file per point of the sweep (``run.h5`` without one)
     OUTDIR/index.h5        parameters and summary of every run, with external links
@@ -16,7 +16,9 @@ skipped, so the same command after an interruption computes only what is missing
 A file holding another hash (or a file that is not a chainrun run file) is replaced
 only with ``force``; otherwise the sweep refuses before running anything.
 
-It reports through plain callbacks and never imports click.
+It reports through typed results and events (``RunSummary``, ``RunError``,
+``SweepProgress``, ``SweepResult``) to plain callbacks; the words a person reads are
+the command line's (``chainrun.cli``). It never imports click.
 """
 
 from __future__ import annotations
@@ -39,8 +41,7 @@ from chainrun import atomic
 from chainrun.check import Check
 from chainrun.config import Experiment, RunSpec
 from chainrun.errors import ChainrunError, StoreError
-
-INDEX_NAME = "index.h5"
+from chainrun.paths import INDEX_NAME, index_file, run_file  # noqa: F401 (INDEX_NAME: for callers)
 
 #: The environment variable naming a Dask scheduler: Dask's own convention (it sets the
 #: ``scheduler-address`` config key that ``distributed.Client()`` reads), read here
@@ -49,11 +50,6 @@ SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 
 #: Seconds to wait for an existing Dask scheduler to answer.
 CONNECT_TIMEOUT = 20.0
-
-
-def momentum_text(error: float) -> str:
-    """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
-    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
 
 
 @dataclass(frozen=True)
@@ -88,29 +84,6 @@ class RunSummary:
     speed: float = 1.0  # the line's impact speed (largest initial speed)
     driven: bool = False  # the line is driven: it took up its impact and the drives' work
 
-    def line(self) -> str:
-        """One line: how the run ended, its cost and its conservation errors (and,
-        for a checked run, how many balls hold to ``chainrun.check.HOLD``)."""
-        from chainrun.units import format_value
-
-        end = format_value(self.end_time, "time", self.units, 6)
-        if self.terminal:
-            how = f"terminal at t = {end}"
-        elif self.outcome == "stop_time":
-            how = f"stopped at t_end = {end}"
-        else:
-            how = self.message
-        text = (f"{how}, {self.events} events, {self.steps} steps, "
-                f"{momentum_text(self.momentum_error)}, |dE|/E = {self.energy_error:.1e}, "
-                + (f"dissipated {self.dissipated:.1%} of the "
-                   f"{'energy taken up' if self.driven else 'impact energy'}, "
-                   if self.dissipated else "")
-                + f"{self.wall_time:.2f} s"
-                + (f"; {self.check.line(self.speed)}" if self.check is not None else ""))
-        if self.skipped:
-            return f"{self.run_id}: skipped, file up to date ({text})"
-        return f"{self.run_id}: {text}"
-
     def index_entry(self) -> dict:
         return dict(
             run_id=self.run_id, file=self.file, n=self.n, k=self.k, alpha=self.alpha,
@@ -127,9 +100,6 @@ class RunError:
     message: str
     ok = False
     skipped = False
-
-    def line(self) -> str:
-        return f"{self.run_id}: error: {self.message}"
 
 
 @dataclass(frozen=True)
@@ -195,8 +165,56 @@ class SweepResult:
 ProgressHook = Callable[[str, float], None]
 
 
-def run_file(outdir: Path, spec: RunSpec) -> Path:
-    return Path(outdir) / f"{spec.run_id}.h5"
+def observables(line, t: float, x: np.ndarray, v: np.ndarray) -> dict[str, float]:
+    """The energies and momentum of ``line`` at one snapshot, as a run file keeps them
+    (``chainrun.store.OBSERVABLES``): kinetic energy, the energy of its contacts and
+    walls less the external forces' work, and momentum (``chainrun.solver.physics``).
+
+    Parameters
+    ----------
+    line : chainrun.solver.Line
+    t : float
+    x, v : ndarray, shape (N,)
+        Displacements and velocities at ``t``.
+    """
+    from chainrun.solver.physics import (line_kinetic_energy, line_momentum,
+                                         line_potential_energy)
+
+    return {"kinetic_energy": float(line_kinetic_energy(v, line.mass)),
+            "potential_energy": float(line_potential_energy(x, line, t)),
+            "momentum": float(line_momentum(v, line.mass))}
+
+
+def recorder(writer, line):
+    """The solver's ``on_snapshot`` hook that writes each snapshot of ``line`` and its
+    ``observables`` with ``writer`` (a ``chainrun.store.RunWriter``)."""
+    def on_snapshot(index: int, t: float, x: np.ndarray, v: np.ndarray) -> None:
+        writer.snapshot(index, t, x, v, observables(line, t, x, v))
+    return on_snapshot
+
+
+def write_run(path, spec: RunSpec, solution, *, velocity_floor: float) -> None:
+    """Write a whole run file from a ``Solution`` that kept its snapshots.
+
+    Parameters
+    ----------
+    path : str or path
+    spec : RunSpec
+    solution : chainrun.solver.Solution
+        With ``positions`` and ``velocities`` of shape (T, N), or None when T = 0.
+    velocity_floor : float
+    """
+    from chainrun.store import RunWriter
+
+    times = np.asarray(solution.times, dtype=np.float64).reshape(-1)
+    if len(times) and (solution.positions is None or solution.velocities is None):
+        raise StoreError(f"{path}: the solution's snapshots were consumed by an observer; "
+                         "write them with RunWriter.snapshot")
+    with RunWriter(path, spec, velocity_floor=velocity_floor) as writer:
+        record = recorder(writer, spec.line)
+        for i, t in enumerate(times):
+            record(i, float(t), solution.positions[i], solution.velocities[i])
+        writer.finish(solution)
 
 
 def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = None,
@@ -226,7 +244,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
         sol = simulate_line(
             line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
-            max_events=spec.max_events, on_snapshot=writer.snapshot, on_progress=hook,
+            max_events=spec.max_events, on_snapshot=recorder(writer, line), on_progress=hook,
             sensors=spec.sensors, sensor_dt=spec.sensor_dt, sensor_end=spec.sensor_end,
         )
         check = None
@@ -265,7 +283,7 @@ def _check(spec: RunSpec, line, sol, check_outdir, hook) -> Check:
         Path(check_outdir).mkdir(parents=True, exist_ok=True)
         with RunWriter(run_file(Path(check_outdir), checked), checked,
                        velocity_floor=velocity_floor(checked.rtol)) as writer:
-            other = simulate_line(line, checked.times, on_snapshot=writer.snapshot,
+            other = simulate_line(line, checked.times, on_snapshot=recorder(writer, line),
                                   sensors=checked.sensors, sensor_dt=checked.sensor_dt,
                                   sensor_end=checked.sensor_end, **args)
             writer.finish(other)
@@ -305,7 +323,7 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
-        dissipated=_share(run.dissipated_energy, run.line, run.drive_work), units=run.units,
+        dissipated=_share(run.dissipated_energy, run.line, run.drive_energy), units=run.units,
         check=run.check, speed=_speed(run.line), driven=run.line.is_driven,
     )
 
@@ -788,7 +806,7 @@ def simulate_experiment(
         except OSError:
             pass
     runs = [results[s.run_id] for s in specs]
-    index = outdir / INDEX_NAME
+    index = index_file(outdir)
     entries = [r.index_entry() for r in runs if isinstance(r, RunSummary)]
     write_index(index, experiment.name, entries)
     if check_outdir is not None:
@@ -810,7 +828,7 @@ def _write_check_index(check_outdir: Path, name: str, checked: list[RunSpec]) ->
             except StoreError:
                 continue
     if entries or check_outdir.is_dir():
-        write_index(check_outdir / INDEX_NAME, name, entries)
+        write_index(index_file(check_outdir), name, entries)
 
 
 def _execute(executor: cf.Executor, todo: list[RunSpec], outdir: Path, report, update,
@@ -874,33 +892,3 @@ def _describe(exc: BaseException) -> str:
     if isinstance(exc, ChainrunError):
         return text
     return f"{name}: {text}" if text else name
-
-
-def velocity_table(summaries: list[RunSummary], max_balls: int = 20) -> str | None:
-    """The velocities where the runs ended as a text table (balls down, runs across),
-    under a heading with their unit, for short lines: final velocities where every
-    run reached its terminal state; a checked run's with no digit beyond its spread
-    (``chainrun.units.supported_format``)."""
-    from chainrun.units import scale_for, supported_format
-
-    if (not summaries or any(s.n != summaries[0].n for s in summaries)
-            or len({s.units for s in summaries}) > 1):
-        return None
-    n = summaries[0].n
-    if n > max_balls:
-        return None
-    scaled = scale_for("velocity", summaries[0].units,
-                       np.concatenate([s.final_velocity for s in summaries]))
-    what = ("final velocities" if all(s.terminal for s in summaries)
-            else "velocities where the runs stopped")
-
-    def cell(s: RunSummary, i: int) -> str:
-        spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
-        return supported_format(".4f", float(scaled(s.final_velocity[i])),
-                                float(scaled(spread)))
-
-    head = ["n"] + [s.run_id for s in summaries]
-    rows = [[str(i + 1)] + [cell(s, i) for s in summaries] for i in range(n)]
-    widths = [max(len(r[c]) for r in [head] + rows) for c in range(len(head))]
-    fmt = lambda r: "  ".join(v.rjust(w) for v, w in zip(r, widths))
-    return "\n".join([f"{what} ({scaled.unit})", fmt(head)] + [fmt(r) for r in rows])
