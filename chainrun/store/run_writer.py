@@ -121,8 +121,10 @@ class _Element:
 class RunWriter:
     """Write one run file, snapshot by snapshot, then atomically put it in place.
 
-    Use as a context manager. ``snapshot`` has the signature of the solver's
-    ``on_snapshot`` hook; snapshots are written in blocks of up to
+    Use as a context manager. ``snapshot`` takes the solver's snapshot (as its
+    ``on_snapshot`` hook does) and the line's energies and momentum at it, which the
+    caller computes (``chainrun.runner.recorder`` is that hook); snapshots are written
+    in blocks of up to
     ``SNAPSHOT_BUFFER`` bytes (a larger snapshot at once, without a copy);
     ``finish`` writes the rest, the results, events and diagnostics, closes the file
     and renames it to ``path``. Leaving the ``with`` block by an exception, or
@@ -141,10 +143,9 @@ class RunWriter:
 
     Examples
     --------
+    >>> from chainrun.runner import recorder
     >>> with RunWriter("results/runs/k=2.h5", spec, velocity_floor=1e-12) as w:
-    ...     def on_snapshot(i, t, x, v):
-    ...         w.snapshot(i, t, x, v, energies_and_momentum(spec.line, t, x, v))
-    ...     sol = simulate_line(spec.line, spec.times, on_snapshot=on_snapshot)
+    ...     sol = simulate_line(spec.line, spec.times, on_snapshot=recorder(w, spec.line))
     ...     w.finish(sol)
     """
 
