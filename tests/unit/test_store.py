@@ -5,6 +5,7 @@ The solutions here are built by hand (no solver): small N, a few snapshots and e
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -243,6 +244,22 @@ def test_read_run_round_trip(run):
     assert not np.any(r.observables["drive_work"]) and r.drive_energy == 0.0
     np.testing.assert_array_equal(r.contact_dissipation, np.zeros(spec.n - 1))
     np.testing.assert_array_equal(r.wall_impulse, [0.0, 0.0])
+
+
+def test_a_run_read_back_has_every_field_of_the_solution(run):
+    # RunData holds the Solution it read: a field the solver gains is there without a
+    # declaration of its own
+    path, spec, sol = run
+    r = store.read_run(path)
+    assert isinstance(r.solution, Solution)
+    for field in dataclasses.fields(Solution):
+        getattr(r, field.name)
+    assert set(dir(r)) >= {field.name for field in dataclasses.fields(Solution)}
+    np.testing.assert_array_equal(r.solution.event_contact, sol.event_contact)
+    assert r.solution.outcome is Outcome.TERMINAL and r.solution.diagnostics == sol.diagnostics
+    np.testing.assert_array_equal(r.line.mass, spec.line.mass)
+    with pytest.raises(AttributeError, match="no_such_field"):
+        r.no_such_field
 
 
 def test_every_item_is_in_the_schema_page(run):
