@@ -85,16 +85,16 @@ simulate: $(STAMP)
 RESULTS  ?= results
 JOBS     ?= 2
 CHAINRUN := $(BIN)/chainrun
-SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py chainrun/runner.py \
-                    chainrun/store.py chainrun/check.py
+SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py $(wildcard chainrun/runner/*.py) \
+                    $(wildcard chainrun/store/*.py) chainrun/paths.py chainrun/check.py
 ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py chainrun/check.py \
                     chainrun/analysis/similarity.py chainrun/analysis/nesterenko.py \
-                    chainrun/artefacts.py chainrun/store.py
+                    chainrun/artefacts.py $(wildcard chainrun/store/*.py)
 PLOT_SOURCES     := chainrun/plotting/__init__.py chainrun/plotting/common.py \
                     chainrun/plotting/chainrun.mplstyle
 ARTEFACT_RULES   := $(RESULTS)/artefacts.mk
 
-$(ARTEFACT_RULES): chainrun/artefacts.py $(STAMP)
+$(ARTEFACT_RULES): chainrun/artefacts.py chainrun/paths.py $(STAMP)
 	@mkdir -p $(@D)
 	$(CHAINRUN) plot --list --format make --results $(RESULTS) > $@.partial
 	mv $@.partial $@

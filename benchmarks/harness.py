@@ -81,7 +81,7 @@ def solve(line, times=(), *, t_end=None, rtol=None, closed_form=True, timeout=No
     """Run ``line`` with chainrun's solver in this process: the benchmarks' one call
     of it. A run still going after ``timeout`` seconds raises ``Deadline``;
     ``on_progress(t)`` is called as the solver reports its time."""
-    from chainrun.solver import DEFAULT_RTOL, simulate_line
+    from chainrun.solver import DEFAULT_RTOL, simulate
 
     start = time.perf_counter()
 
@@ -91,8 +91,8 @@ def solve(line, times=(), *, t_end=None, rtol=None, closed_form=True, timeout=No
         if on_progress is not None:
             on_progress(t)
 
-    return simulate_line(line, times, t_end=t_end, closed_form=closed_form,
-                         rtol=DEFAULT_RTOL if rtol is None else rtol, on_progress=progress)
+    return simulate(line, times, t_end=t_end, closed_form=closed_form,
+                    rtol=DEFAULT_RTOL if rtol is None else rtol, on_progress=progress)
 
 
 def solve_paper(n, k, alpha, *, t_end=None, rtol=None, timeout=None, times=()):

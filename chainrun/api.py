@@ -32,6 +32,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from chainrun.paths import index_file
+
 __all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
@@ -237,7 +239,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         "overrides": json.dumps(run.parameters.get("overrides", {})),
         "outcome": run.outcome, "terminal": int(run.terminal), "end_time": run.end_time,
         "message": run.message, "units": "SI" if si else _UNITS,
-        "dissipated_energy": run.dissipated_energy, "final_drive_work": run.drive_work,
+        "dissipated_energy": run.dissipated_energy, "final_drive_work": run.drive_energy,
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
         **{f"scales_{k}": v for k, v in scales.items()},
@@ -285,7 +287,7 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     from chainrun.store import read_index
 
     folder = Path(folder)
-    index = folder / "index.h5"
+    index = index_file(folder)
     if not index.is_file():
         raise StoreError(f"{folder}: no index.h5 (not a chainrun output folder)")
     rows = read_index(index)
@@ -557,10 +559,10 @@ def transmission(run, *, harmonics: int = 3, start: float | None = None,
     folder = Path(run)
     if not folder.is_dir():
         return measure(read_run(folder), **options)
-    if not (folder / "index.h5").is_file():
+    if not index_file(folder).is_file():
         raise StoreError(f"{folder}: no index.h5 (not a chainrun output folder)")
     return measure_sweep([read_run(folder / str(row["file"]))
-                          for row in read_index(folder / "index.h5")], **options)
+                          for row in read_index(index_file(folder))], **options)
 
 
 def spectrum(config=None, /, *, period: int | None = None,

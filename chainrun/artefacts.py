@@ -23,6 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from chainrun.paths import analysis_path, index_path, run_dir
+
 __all__ = [
     "ALL",
     "ARTEFACTS",
@@ -226,21 +228,6 @@ def experiments(group: tuple[Artefact, ...] = ARTEFACTS) -> list[str]:
         for experiment in artefact.experiments:
             seen.setdefault(experiment, None)
     return list(seen)
-
-
-def run_dir(experiment: str, results="results") -> Path:
-    """The folder of an experiment's run files."""
-    return Path(results) / "runs" / experiment
-
-
-def index_path(experiment: str, results="results") -> Path:
-    """The index file of an experiment's runs (written by ``chainrun simulate``)."""
-    return run_dir(experiment, results) / "index.h5"
-
-
-def analysis_path(name: str, results="results") -> Path:
-    """The analysis file of an artefact."""
-    return Path(results) / "analysis" / f"{name}.h5"
 
 
 def output_paths(artefact: Artefact, results="results") -> list[Path]:

@@ -13,7 +13,7 @@ less the work of the external forces), and the energy the damping dissipated. Th
 add up to 100%, to the run's energy error. On a driven line (a moving wall, forces
 prescribed in time) the shares are of the energy the line took up by the end: its
 impact energy (0 without strikers) plus the drives' work by then
-(``RunData.drive_work``), which the same shares add up to; a line that took up no
+(``RunData.drive_energy``), which the same shares add up to; a line that took up no
 energy has none.
 """
 
@@ -197,7 +197,7 @@ def summarize(run) -> RunSummary:
     back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
     impact = run.impact_energy
-    work = float(run.drive_work)
+    work = float(run.drive_energy)
     taken = impact + work
     stored = (float(line_potential_energy(run.final_position, line, run.end_time))
               - run.baseline_energy)

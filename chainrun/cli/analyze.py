@@ -8,13 +8,14 @@ import click
 
 from chainrun.cli.common import fail
 from chainrun.errors import ChainrunError
+from chainrun.paths import RESULTS
 
 
 @click.command()
 @click.argument("names", nargs=-1)
 @click.option("--all", "all_", is_flag=True, help="Every artefact, in the registry's order.")
 @click.option("-r", "--results", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("results"), show_default=True,
+              default=RESULTS, show_default=True,
               help="Results folder: runs are read from RESULTS/runs/<experiment>/, analysis "
                    "files written to RESULTS/analysis/<name>.h5.")
 @click.option("--check", is_flag=True,

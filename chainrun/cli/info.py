@@ -141,7 +141,7 @@ def render(s, sensors=()) -> str:
     add a section."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
-    from chainrun.runner import momentum_text
+    from chainrun.cli.text import momentum_text
     from chainrun.units import format_value
 
     def t(x):
@@ -323,7 +323,7 @@ def info(paths: tuple[Path, ...]):
     """
     from chainrun.analysis.ensemble import is_ensemble
     from chainrun.analysis.summary import summarize
-    from chainrun.runner import INDEX_NAME
+    from chainrun.paths import INDEX_NAME
     from chainrun.store import read_index, read_run
 
     try:

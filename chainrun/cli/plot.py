@@ -9,6 +9,7 @@ import click
 
 from chainrun.cli.common import fail
 from chainrun.errors import ChainrunError
+from chainrun.paths import INDEX_NAME, RESULTS, index_file
 
 
 def _ensemble(folder: Path):
@@ -16,7 +17,7 @@ def _ensemble(folder: Path):
     from chainrun.analysis.ensemble import ensemble, is_ensemble
     from chainrun.store import read_index, read_run
 
-    runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    runs = [read_run(folder / str(row["file"])) for row in read_index(index_file(folder))]
     return ensemble(runs) if is_ensemble(runs) else None
 
 
@@ -26,7 +27,7 @@ def _transmission(folder: Path):
     from chainrun.analysis.transmission import measure_sweep
     from chainrun.store import read_index, read_run
 
-    runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    runs = [read_run(folder / str(row["file"])) for row in read_index(index_file(folder))]
     swept = any(key.startswith("walls.") and key.endswith(".motion.frequency")
                 for run in runs for key in run.parameters.get("overrides", {}))
     if not swept or not all(run.sensor_balls.size for run in runs):
@@ -44,7 +45,7 @@ def _transmission(folder: Path):
               default="text", show_default=True,
               help="Format of --list; `make` writes the rules the Makefile includes.")
 @click.option("-r", "--results", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("results"), show_default=True,
+              default=RESULTS, show_default=True,
               help="Results folder: analysis files are read from RESULTS/analysis/, outputs "
                    "written under RESULTS/.")
 @click.option("--what", default=None, metavar="VIEWS",
@@ -123,7 +124,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
             fail(f"--balls {balls!r}: expected ball numbers, e.g. 1,-1")
         for name in names:
             folder = Path(name)
-            files = sorted(p for p in folder.glob("*.h5") if p.name != "index.h5") \
+            files = sorted(p for p in folder.glob("*.h5") if p.name != INDEX_NAME) \
                 if folder.is_dir() else [folder]
             if not files:
                 fail(f"{name}: no run files")
@@ -131,7 +132,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                 for path in files:
                     paths = render_run(path, views, out=out, log=log)
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
-                if folder.is_dir() and len(files) > 1 and (folder / "index.h5").is_file():
+                if folder.is_dir() and len(files) > 1 and index_file(folder).is_file():
                     paths = render_sweep(folder, numbers, out=out, log=log,
                                          ensemble=_ensemble(folder),
                                          transmission=_transmission(folder))

@@ -122,7 +122,9 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
 
     with start_up("simulate"):  # pydantic and the config models
         from chainrun.config import load_experiment
-        from chainrun.runner import simulate_experiment, velocity_table
+        from chainrun.cli.text import run_line, velocity_table
+        from chainrun.paths import outdir as default_outdir
+        from chainrun.runner import simulate_experiment
 
         try:
             experiment = load_experiment(config)
@@ -130,14 +132,14 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
             for problem in exc.problems:
                 click.echo(f"{exc.source}: {problem}", err=True)
             sys.exit(EXIT_BAD_INPUT)
-    outdir = outdir if outdir is not None else Path("results") / experiment.name
+    outdir = outdir if outdir is not None else default_outdir(experiment.name)
     total = len(experiment.runs())
     click.echo(f"{experiment.name}: {total} run{'s' * (total != 1)} -> {outdir}/", err=True)
     bar = _SweepBar()
 
     def run_done(run):
         bar.clear()
-        click.echo(run.line())
+        click.echo(run_line(run))
 
     try:
         try:

@@ -89,6 +89,7 @@ def spectrum(config: Path, outdir: Path | None, period: int | None):
     """
     from chainrun.analysis.spectrum import run_spectrum
     from chainrun.config import load_experiment
+    from chainrun.paths import spectrum_dir
     from chainrun.plotting import render_spectrum
     from chainrun.store import write_spectrum
 
@@ -98,7 +99,7 @@ def spectrum(config: Path, outdir: Path | None, period: int | None):
         for problem in exc.problems:
             click.echo(f"{exc.source}: {problem}", err=True)
         sys.exit(EXIT_BAD_INPUT)
-    outdir = outdir if outdir is not None else Path("results") / experiment.name / "spectrum"
+    outdir = outdir if outdir is not None else spectrum_dir(experiment.name)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -220,23 +220,3 @@ def impact_energy(line) -> float:
     start = float(line_kinetic_energy(line.velocity, line.mass)
                   + line_potential_energy(line.position, line, 0.0))
     return start - baseline_energy(line)
-
-
-# --- the paper's line (unit masses and stiffnesses, no gap, wall or force) ------------------
-# The names the run files' writer and reader call for the paper's runs: the general
-# formulas of that line.
-
-
-def momentum(v: np.ndarray) -> np.ndarray:
-    """``line_momentum`` of unit masses; shape (...)."""
-    return line_momentum(v, 1.0)
-
-
-def kinetic_energy(v: np.ndarray) -> np.ndarray:
-    """``line_kinetic_energy`` of unit masses; shape (...)."""
-    return line_kinetic_energy(v, 1.0)
-
-
-def potential_energy(x: np.ndarray, alpha: float) -> np.ndarray:
-    """``line_potential_energy`` of unit stiffnesses, no gap, wall or force; shape (...)."""
-    return _one_law_energy(np.asarray(x, dtype=float), np.zeros(0), 1.0, float(alpha))[()]

@@ -13,6 +13,7 @@ from click.testing import CliRunner
 
 import chainrun
 import chainrun.runner as runner
+from chainrun.runner import executors
 from chainrun.cli import main
 from chainrun.store import read_index
 
@@ -112,7 +113,7 @@ def test_help_explains_resumption_and_clusters(cli):
 
 def test_an_unreachable_scheduler_is_one_line(cli, tmp_path, monkeypatch):
     pytest.importorskip("distributed")
-    monkeypatch.setattr(runner, "CONNECT_TIMEOUT", 1.0)
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT", 1.0)
     config = tmp_path / "cradle.toml"
     config.write_text('name = "cradle"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n')
     result = cli("simulate", config, "--scheduler", "tcp://127.0.0.1:9")

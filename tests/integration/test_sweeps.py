@@ -21,6 +21,7 @@ import pytest
 from click.testing import CliRunner
 
 import chainrun.runner as runner
+from chainrun.runner import executors
 from chainrun.cli import main
 from chainrun.config import load_experiment
 from chainrun.errors import ChainrunError
@@ -270,7 +271,7 @@ def test_a_run_that_raises_does_not_stop_the_others(tmp_path, monkeypatch):
 
 
 def test_local_processes_without_dask(tmp_path, monkeypatch):
-    monkeypatch.setattr(runner, "dask_available", lambda: False)
+    monkeypatch.setattr(executors, "dask_available", lambda: False)
     config = write(tmp_path / "small.toml", SMALL.format(ks="[1, 2, 3]"))
     result = runner.simulate_experiment(load_experiment(config), tmp_path / "out", jobs=2)
     assert result.workers == "on 2 local processes"
@@ -287,7 +288,7 @@ def test_where_to_compute_is_checked_before_anything_runs(tmp_path, monkeypatch)
     monkeypatch.delenv(runner.SCHEDULER_ENV, raising=False)
     assert runner.open_executor().__class__ is runner.InlineExecutor
     assert runner.open_executor(jobs=4, runs=1).__class__ is runner.InlineExecutor
-    monkeypatch.setattr(runner, "dask_available", lambda: False)
+    monkeypatch.setattr(executors, "dask_available", lambda: False)
     with pytest.raises(ChainrunError, match=r"chainrun\[dask\]"):
         runner.open_executor(scheduler="tcp://127.0.0.1:9")
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from chainrun import generators, store
+from chainrun import generators, runner, store
 from chainrun.cli import main
 from chainrun.config import Walls, build_line, load_experiment, parse_experiment
 from chainrun.errors import ConfigError
@@ -406,7 +406,7 @@ def test_si_run_file_records_model_units_and_scales(tmp_path):
                                'material = "steel"\n[output]\ntimes = [0.0, 1e-5]\n',
                                "toml").runs()
     path = tmp_path / "run.h5"
-    store.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
+    runner.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
     run = store.read_run(path)
     assert run.units == "si"
     np.testing.assert_array_equal(run.model["mass"], spec.line.mass)
@@ -426,7 +426,7 @@ def test_si_run_file_records_model_units_and_scales(tmp_path):
 def test_old_run_files_without_a_model_still_read(tmp_path):
     (spec,) = parse_experiment(HEAD + "[chain]\nn = 3\nk = 1\nalpha = 1.5\n", "toml").runs()
     path = tmp_path / "run.h5"
-    store.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
+    runner.write_run(path, spec, _fake_solution(spec), velocity_floor=1e-12)
     with h5py.File(path, "a") as h5:
         del h5["model"]
     run = store.read_run(path)

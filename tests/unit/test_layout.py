@@ -17,6 +17,7 @@ RANK = {
     "chainrun.errors": 0, "chainrun.atomic": 0, "chainrun._gc": 0,
     "chainrun.materials": 0,  # data only
     "chainrun.units": 0,
+    "chainrun.paths": 0,  # names of folders and files only
     "chainrun.solver": 1, "chainrun.generators": 1, "chainrun.check": 1,
     "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
     "chainrun.store": 3,
@@ -35,6 +36,17 @@ FORBIDDEN = {
     "chainrun.analysis": {"click", "matplotlib", "h5py"},
     "chainrun.plotting": {"click", "h5py", "scipy"},
     "chainrun.runner": {"click", "matplotlib"},
+    "chainrun.paths": {"numpy", "h5py", "click", "matplotlib", "pydantic"},
+}
+#: the modules of the store, in layers: each imports only those of lower layers (the
+#: shared HDF5 helpers under every kind of file; the run files' reader on their writer's
+#: list of observables); the store computes nothing of a line's physics
+STORE_LAYERS = {
+    "chainrun.store._h5": 0,
+    "chainrun.store.run_writer": 1, "chainrun.store.index": 1,
+    "chainrun.store.analysis": 1, "chainrun.store.spectrum": 1,
+    "chainrun.store.run_reader": 2,
+    "chainrun.store": 3,
 }
 #: arrows the ranks allow but the design does not: plotting draws what is stored and
 #: computes nothing (no solver, no analysis, no runs)
@@ -126,5 +138,21 @@ def test_imports_point_down_the_pipeline():
             continue  # the version, for the files' provenance
         dst = _target_part(target)
         if dst != src and (RANK[dst] >= RANK[src] or (src, dst) in EXTRA):
+            wrong.add((name, target))
+    assert not wrong, sorted(wrong)
+
+
+def test_the_store_is_layered_and_writes_no_physics_of_its_own():
+    assert set(STORE_LAYERS) == {m for m in _modules() if _part(m) == "chainrun.store"}
+    wrong = set()
+    for name, target in _imports():
+        if name not in STORE_LAYERS:
+            continue
+        # what a file holds comes from its writer's caller; only RunData derives
+        # energies from what it read
+        if target.startswith("chainrun.solver.physics") and name != "chainrun.store.run_reader":
+            wrong.add((name, target))
+        inner = target if target in STORE_LAYERS else target.rpartition(".")[0]
+        if inner in STORE_LAYERS and inner != name and STORE_LAYERS[inner] >= STORE_LAYERS[name]:
             wrong.add((name, target))
     assert not wrong, sorted(wrong)

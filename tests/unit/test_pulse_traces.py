@@ -20,6 +20,7 @@ from chainrun.analysis.pulse import (
     wave_speed,
 )
 from chainrun.errors import ChainrunError
+from chainrun.solver import Solution
 from chainrun.store import RunData
 
 DT = 0.01
@@ -138,11 +139,13 @@ def test_wave_speed_fit():
 # ------------------------------------------------------------------- on a run's sensors
 def _run(n, sensors, t, force, model=None) -> RunData:
     """A RunData holding only what pulse measurements read."""
-    blank = {f.name: None for f in dataclasses.fields(RunData)
-             if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
-    return RunData(**{**blank, "path": Path("synthetic.h5"), "parameters": {"n": n},
-                      "sensor_balls": np.asarray(sensors), "sensor_time": t,
-                      "sensor_force": force, "model": model})
+    def blank(cls):
+        return {f.name: None for f in dataclasses.fields(cls)
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
+    solution = Solution(**{**blank(Solution), "n": n, "sensor_balls": np.asarray(sensors),
+                           "sensor_time": t, "sensor_force": force})
+    return RunData(**{**blank(RunData), "solution": solution, "path": Path("synthetic.h5"),
+                      "parameters": {"n": n}, "model": model})
 
 
 def test_run_sensors_on_unequal_spheres_with_gaps():

@@ -19,7 +19,7 @@ import h5py
 import numpy as np
 import pytest
 
-from chainrun import store
+from chainrun import runner, store
 from chainrun.config import RunSpec
 from chainrun.errors import StoreError
 from chainrun.solver import Diagnostics, Outcome, Solution
@@ -45,7 +45,7 @@ def make_run(path: Path, n: int = 5, times=(0.0, 0.5, 1.0, 2.0)) -> Path:
         positions=rng.random((len(times), n)), velocities=rng.random((len(times), n)),
         diagnostics=diag,
     )
-    store.write_run(path, spec, sol, velocity_floor=1e-12)
+    runner.write_run(path, spec, sol, velocity_floor=1e-12)
     return path
 
 

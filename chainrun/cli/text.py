@@ -1,0 +1,74 @@
+"""How a sweep's results read: one line per run, and the table of final velocities.
+
+The runner reports typed results (``chainrun.runner.RunSummary``, ``RunError``); this
+module puts them into words for ``chainrun simulate`` (and ``chainrun info``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def momentum_text(error: float) -> str:
+    """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
+    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
+
+
+def run_line(run) -> str:
+    """One line for a run (``RunSummary``): how it ended, its cost and its conservation
+    errors (and, for a checked run, how many balls hold to ``chainrun.check.HOLD``); for
+    a run that failed to run (``RunError``), its error."""
+    from chainrun.runner import RunError
+    from chainrun.units import format_value
+
+    if isinstance(run, RunError):  # no file
+        return f"{run.run_id}: error: {run.message}"
+    end = format_value(run.end_time, "time", run.units, 6)
+    if run.terminal:
+        how = f"terminal at t = {end}"
+    elif run.outcome == "stop_time":
+        how = f"stopped at t_end = {end}"
+    else:
+        how = run.message
+    text = (f"{how}, {run.events} events, {run.steps} steps, "
+            f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}, "
+            + (f"dissipated {run.dissipated:.1%} of the "
+               f"{'energy taken up' if run.driven else 'impact energy'}, "
+               if run.dissipated else "")
+            + f"{run.wall_time:.2f} s"
+            + (f"; {run.check.line(run.speed)}" if run.check is not None else ""))
+    if run.skipped:
+        return f"{run.run_id}: skipped, file up to date ({text})"
+    return f"{run.run_id}: {text}"
+
+
+def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
+    """The velocities where the runs (``RunSummary``) ended as a text table (balls
+    down, runs across), under a heading with their unit, for short lines: final
+    velocities where every run reached its terminal state; a checked run's with no
+    digit beyond its spread (``chainrun.units.supported_format``)."""
+    from chainrun.units import scale_for, supported_format
+
+    if (not summaries or any(s.n != summaries[0].n for s in summaries)
+            or len({s.units for s in summaries}) > 1):
+        return None
+    n = summaries[0].n
+    if n > max_balls:
+        return None
+    scaled = scale_for("velocity", summaries[0].units,
+                       np.concatenate([s.final_velocity for s in summaries]))
+    what = ("final velocities" if all(s.terminal for s in summaries)
+            else "velocities where the runs stopped")
+
+    def cell(s, i: int) -> str:
+        spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
+        return supported_format(".4f", float(scaled(s.final_velocity[i])),
+                                float(scaled(spread)))
+
+    head = ["n"] + [s.run_id for s in summaries]
+    rows = [[str(i + 1)] + [cell(s, i) for s in summaries] for i in range(n)]
+    widths = [max(len(r[c]) for r in [head] + rows) for c in range(len(head))]
+    fmt = lambda r: "  ".join(v.rjust(w) for v, w in zip(r, widths))
+    return "\n".join([f"{what} ({scaled.unit})", fmt(head)] + [fmt(r) for r in rows])
