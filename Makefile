@@ -85,7 +85,7 @@ simulate: $(STAMP)
 RESULTS  ?= results
 JOBS     ?= 2
 CHAINRUN := $(BIN)/chainrun
-SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py chainrun/runner.py \
+SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py chainrun/config/*.py) chainrun/runner.py \
                     chainrun/store.py chainrun/check.py
 ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py chainrun/check.py \
                     chainrun/analysis/similarity.py chainrun/analysis/nesterenko.py \

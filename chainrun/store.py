@@ -493,8 +493,8 @@ class RunWriter:
         self._n = int(spec.n)
         self._alpha = float(spec.alpha)
         self._units = getattr(spec, "units", "paper")
-        # the paper's line (chain None) keeps its observables' formulas, bit for bit
-        self._line = None if getattr(spec, "chain", None) is None else spec.line
+        # the paper's line keeps its observables' formulas, bit for bit
+        self._line = None if spec.is_paper else spec.line
         self._pending_bytes = 0
         self._done = False
         self._h5: h5py.File | None = _create(self.path, self.temp_path, "run file")

@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from chainrun import generators, store
 from chainrun.cli import main
-from chainrun.config import Walls, build_line, load_experiment, parse_experiment
+from chainrun.config import load_experiment, parse_experiment
 from chainrun.errors import ConfigError
 from chainrun.materials import MATERIALS
 from chainrun.solver import Diagnostics, Outcome, Solution, physics
@@ -355,7 +355,7 @@ def test_a_line_at_rest_is_terminal_at_once():
 
 def test_paper_config_has_the_paper_line_and_its_old_hash():
     (spec,) = parse_experiment(HEAD + "[chain]\nn = 5\nk = 2\nalpha = 1.5\n", "toml").runs()
-    assert spec.chain is None and spec.units == "paper"
+    assert spec.is_paper and spec.units == "paper"
     assert spec.config["chain"] == {"n": 5, "k": 2, "alpha": 1.5} and "walls" not in spec.config
     line = spec.line
     assert line.is_paper and line.n == 5 and strikers(line) == 2
