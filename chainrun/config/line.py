@@ -232,21 +232,25 @@ def line_of(chain: Chain, walls: Walls, units: str) -> Line:
                          else np.array([settings.restitution]),
                          settings.damping_exponent),
             None if settings.motion is None else settings.motion.drive)
+    conflict = None  # keys that precompression sets itself
     if chain.precompression:
         if force is not None and np.any(force != 0.0):
-            raise LineError([Problem("chain.precompression", "sets the external force "
-                                     "itself; leave chain.force out")])
-        if walls.left is not None and walls.right is not None and walls.left.gap != 0.0:
-            raise LineError([Problem("walls.left.gap", "set by chain.precompression "
-                                     "between two walls (the left wall is placed where "
-                                     "every contact carries the load); leave it out")])
+            conflict = Problem("chain.precompression", "sets the external force itself; "
+                               "leave chain.force out")
+        elif walls.left is not None and walls.right is not None and walls.left.gap != 0.0:
+            conflict = Problem("walls.left.gap", "set by chain.precompression between two "
+                               "walls (the left wall is placed where every contact carries "
+                               "the load); leave it out")
     try:
-        return build_line(n, velocity, spheres=spheres,
+        line = build_line(n, velocity, spheres=spheres,
                           dissipation=_dissipation(chain, damping, restitution, exponent),
                           left=built.get("left"), right=built.get("right"), drives=drives,
-                          precompression=chain.precompression, **kw)
+                          precompression=None if conflict else chain.precompression, **kw)
     except BuildError as exc:
         raise LineError([Problem(_key(key), reason) for key, reason in exc.problems]) from None
+    if conflict:  # after the line's own problems, as its precompression would be
+        raise LineError([conflict])
+    return line
 
 
 def needs_t_end(chain: Chain, walls: Walls, t_end: float | None,
