@@ -68,7 +68,7 @@ def _number_issue(table: Mapping, key: str, sub: tuple[str, ...], low: float | N
     if low is not None and (x <= low if strict else x < low):
         op = ">" if strict else ">="
         return None, [Issue(f"must be {op} {bound(low)}, got {show_value(table[key])}",
-                             sub + (key,))]
+                            sub + (key,))]
     return x, []
 
 
@@ -80,12 +80,12 @@ def _drive_table(table: Any, sub: tuple[str, ...], base_dir: str, what: str,
     shape = "{ball, amplitude, frequency, ramp}" if ball else "{amplitude, frequency, ramp}"
     if not isinstance(table, Mapping):
         return None, None, [Issue(f"expected a table {shape} or {{file}}, got "
-                                   f"{show_value(table)}", sub)]
+                                  f"{show_value(table)}", sub)]
     keys = [str(k) for k in table]
     allowed = (("file",) if "file" in keys else SINE_KEYS) + (("ball",) if ball else ())
     alone = " (a drive from a file takes no other key)" if "file" in keys else ""
     issues = [Issue(f"unknown key{suggest(k, list(allowed)) or alone}",
-                     sub + (key_text(k),)) for k in keys if k not in allowed]
+                    sub + (key_text(k),)) for k in keys if k not in allowed]
     out: dict[str, Any] = {}
     if ball:
         if "ball" not in table:
@@ -98,7 +98,7 @@ def _drive_table(table: Any, sub: tuple[str, ...], base_dir: str, what: str,
             else:
                 if number < 1:
                     issues.append(Issue(f"must be a ball number >= 1, got {number}",
-                                         sub + ("ball",)))
+                                        sub + ("ball",)))
                 out["ball"] = number
     if "file" in keys:
         try:
@@ -115,7 +115,7 @@ def _drive_table(table: Any, sub: tuple[str, ...], base_dir: str, what: str,
         except (OSError, ValueError, UnicodeDecodeError) as exc:
             reason = " ".join(str(exc).split()) or type(exc).__name__
             return None, None, issues + [Issue(f"cannot read {path}: {reason}",
-                                                sub + ("file",))]
+                                               sub + ("file",))]
         t, u = rows[:, 0], rows[:, 1]
         problem = None
         if t.size < 2:

@@ -81,7 +81,7 @@ def suggest(word: str, choices: list[str]) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
-# --- scalar checks shared by the models and the sweep table ------------------------------
+# --- scalar checks shared by the models and the sweep table -------------------------------
 
 
 def check_int(value: Any) -> int:

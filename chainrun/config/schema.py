@@ -74,7 +74,7 @@ _OptFloat = Annotated[float | None, BeforeValidator(_none_or(check_float))]
 SCALAR_CHECKS = {int: check_int, float: check_float}
 
 
-# --- the tables -------------------------------------------------------------------------
+# --- the chain and its walls --------------------------------------------------------------
 
 
 #: What each per-ball or per-contact key must satisfy: (lowest, strict, highest, what
@@ -178,13 +178,13 @@ def _dissipation_issues(model: BaseModel) -> list[Issue]:
                    for key in ("damping", "damping_exponent") if given(key)]
         if not given("damping_law"):
             issues.append(Issue(f"required with restitution (one of "
-                                 f"{', '.join(collision.LAWS)})", ("damping_law",)))
+                                f"{', '.join(collision.LAWS)})", ("damping_law",)))
     else:
         if given("restitution_speed"):
             issues.append(Issue("given without restitution", ("restitution_speed",)))
         if given("damping_law") and given("damping_exponent"):
             issues.append(Issue("set by damping_law; give one or the other",
-                                 ("damping_exponent",)))
+                                ("damping_exponent",)))
         elif given("damping_law") and not given("damping"):
             issues.append(Issue("needs damping or restitution", ("damping_law",)))
         elif given("damping_exponent") and not given("damping"):
@@ -338,6 +338,8 @@ class Walls(BaseModel):
         return {} if value is None else value  # YAML ``right:`` with nothing under it
 
 
+# --- output and solver --------------------------------------------------------------------
+
 
 def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[Issue]]:
     """Snapshot times ``start, start + step, ...`` up to ``stop`` inclusive (to rounding)."""
@@ -394,7 +396,7 @@ def sensor_balls(value: Any) -> tuple[list[tuple[int, int]], list[Issue]]:
             continue
         if ball < 1:
             issues.append(Issue(f"must be a ball number >= 1, got {ball} at position "
-                                 f"{position}"))
+                                f"{position}"))
         elif ball in balls:
             issues.append(Issue(f"ball {ball} is listed twice (position {position})"))
         else:
@@ -444,7 +446,7 @@ class Output(BaseModel):
         if not isinstance(value, (list, tuple)):
             raise fail(
                 [Issue("expected a list of times or a table {start, stop, step}, got "
-                        f"{show_value(value)}")]
+                       f"{show_value(value)}")]
             )
         issues: list[Issue] = []
         times: list[float] = []
@@ -488,11 +490,14 @@ class SolverSettings(BaseModel):
     check: _Bool = False
 
 
+# --- a run's output against its chain and its stop time -----------------------------------
+
+
 def sensors_beyond_n(sensors, n: int) -> list[Problem]:
     """The problems of sensor balls that the chain does not have, one per ball
     (``sensors``: (position, ball) pairs)."""
     return [Problem("output.sensors", f"ball {b} (position {i}) is beyond chain.n ({n})",
-                     frozenset({"chain.n"})) for i, b in sensors if b > n]
+                    frozenset({"chain.n"})) for i, b in sensors if b > n]
 
 
 def sensor_count(sensors: tuple[int, ...], dt: float | None, end: float | None) -> int:
@@ -523,18 +528,18 @@ def sensor_problems(output: "Output", t_end: float | None) -> list[Problem]:
     end = sensor_end(output, t_end)
     if end is None:
         return [Problem("output.sensor_end", "required with output.sensors on a run to its "
-                         "terminal state without snapshot times (its end is not known "
-                         "before it runs): say when sampling stops",
-                         frozenset({"solver.t_end"}))]
+                        "terminal state without snapshot times (its end is not known "
+                        "before it runs): say when sampling stops",
+                        frozenset({"solver.t_end"}))]
     samples = sensor_count(output.sensors, output.sensor_dt, end)
     if samples > MAX_SENSOR_SAMPLES:
         where = "output.sensor_end" if output.sensor_end is not None else (
             "solver.t_end" if t_end is not None else "output.times")
         return [Problem("output.sensor_dt", f"{len(output.sensors)} sensor{'s' * (len(output.sensors) != 1)} every "
-                         f"{output.sensor_dt:g} up to {end:g} ({where}) take "
-                         f"{samples:.3g} samples, too many (at most {MAX_SENSOR_SAMPLES:.0e}); "
-                         "sample less often, or stop sooner with output.sensor_end",
-                         frozenset({"solver.t_end", "output.sensor_end"}))]
+                        f"{output.sensor_dt:g} up to {end:g} ({where}) take "
+                        f"{samples:.3g} samples, too many (at most {MAX_SENSOR_SAMPLES:.0e}); "
+                        "sample less often, or stop sooner with output.sensor_end",
+                        frozenset({"solver.t_end", "output.sensor_end"}))]
     return []
 
 

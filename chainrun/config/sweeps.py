@@ -128,14 +128,14 @@ def check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list[
                 count = 0
             if not 1 <= count <= MAX_REPLICAS:
                 issues.append(Issue(f"expected a number of runs from 1 to {MAX_REPLICAS}, "
-                                     f"got {show_value(values)}", (key,)))
+                                    f"got {show_value(values)}", (key,)))
             else:
                 named.add("replica")
                 valid["replica"] = tuple(range(count))
             continue
         if sweep_type(key) is None:
             issues.append(Issue(f"unknown key '{key}'"
-                                 f"{suggest(key, [*SWEEPABLE_KEYS, REPLICAS])}"))
+                                f"{suggest(key, [*SWEEPABLE_KEYS, REPLICAS])}"))
             continue
         sub = (key,)
         if key in named:  # "chain.k" and chain = {k = ...} in one table
@@ -171,7 +171,7 @@ def check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list[
     seeds = [key for key in valid if key.endswith(".seed")]
     if "replica" in valid and seeds:
         issues.append(Issue(f"give replicas or a sweep of seeds ({seeds[0]}), not both",
-                             (REPLICAS,)))
+                            (REPLICAS,)))
         valid.pop("replica")
     return valid, named, issues
 
@@ -295,7 +295,7 @@ def canonical_json(config: dict[str, Any], times_json: str) -> str:
 
 
 def generator_sweep_issues(valid: dict[str, tuple], chain: Any,
-                            walls: Any = None) -> list[Issue]:
+                           walls: Any = None) -> list[Issue]:
     """Sweeps of a generator's field, or replicas, on a chain without such a table, and
     of a wall motion's key where the motion is not one sine (the entries are dropped
     from ``valid``)."""
@@ -305,8 +305,8 @@ def generator_sweep_issues(valid: dict[str, tuple], chain: Any,
         if generator is not None and isinstance(chain, Mapping) and not isinstance(
                 chain.get(generator[0]), Mapping):
             issues.append(Issue(f"chain.{generator[0]} is not a generator table "
-                                 f"(e.g. {{random = \"uniform\", ..., seed = 1}}): "
-                                 f"there is no {generator[1]} to sweep", (key,)))
+                                f"(e.g. {{random = \"uniform\", ..., seed = 1}}): "
+                                f"there is no {generator[1]} to sweep", (key,)))
             valid.pop(key)
     for key in list(valid):
         parts = key.split(".")
@@ -315,11 +315,11 @@ def generator_sweep_issues(valid: dict[str, tuple], chain: Any,
             motion = _plain_table(wall.get("motion")) if isinstance(wall, Mapping) else None
             if not (isinstance(motion, Mapping) and "file" not in motion):
                 issues.append(Issue(f"walls.{parts[1]}.motion is not one sine table "
-                                     f"{{amplitude, frequency, ramp}}: there is no "
-                                     f"{parts[3]} to sweep", (key,)))
+                                    f"{{amplitude, frequency, ramp}}: there is no "
+                                    f"{parts[3]} to sweep", (key,)))
                 valid.pop(key)
     if "replica" in valid and isinstance(chain, Mapping) and not _random_keys(chain):
         issues.append(Issue("the chain draws no random values (a table with random = "
-                             "...): its replicas would be one run", (REPLICAS,)))
+                            "...): its replicas would be one run", (REPLICAS,)))
         valid.pop("replica")
     return issues
