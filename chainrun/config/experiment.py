@@ -176,7 +176,7 @@ class Experiment(BaseModel):
         checked = self._checked
         if checked is None or checked[0] != to_run:
             checked = validate(self._data(), self._source or self.name, to_run)._checked
-        base = self._base_data()
+        base, source_text = self._base_data(), self.source_text
         # The times are the same in every run: serialise them once for the hashes.
         times_json = json.dumps(list(self.output.times), separators=(",", ":"))
         specs: list[RunSpec] = []
@@ -203,7 +203,7 @@ class Experiment(BaseModel):
                 config=config,
                 config_hash=hashlib.sha256(canonical_json(config, times_json).encode()
                                            ).hexdigest(),
-                source_text=self.source_text,
+                source_text=source_text,
                 units=self.units,
                 chain=chain,
                 walls=walls,
