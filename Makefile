@@ -85,8 +85,9 @@ simulate: $(STAMP)
 RESULTS  ?= results
 JOBS     ?= 2
 CHAINRUN := $(BIN)/chainrun
-SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py) chainrun/config.py $(wildcard chainrun/runner/*.py) \
-                    $(wildcard chainrun/store/*.py) chainrun/paths.py chainrun/check.py
+SOLVER_SOURCES   := $(wildcard chainrun/solver/*.py chainrun/config/*.py) \
+                    $(wildcard chainrun/runner/*.py) $(wildcard chainrun/store/*.py) \
+                    chainrun/paths.py chainrun/check.py
 ANALYSIS_SOURCES := chainrun/analysis/__init__.py chainrun/analysis/derived.py chainrun/check.py \
                     chainrun/analysis/similarity.py chainrun/analysis/nesterenko.py \
                     chainrun/artefacts.py $(wildcard chainrun/store/*.py)

@@ -89,7 +89,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     from chainrun.store import RunWriter
 
     check_memory(spec.n, len(spec.times), damped=spec.damped, samples=spec.sensor_samples)
-    line = spec.line  # built here, on the worker: as long as the line (ConfigError if wrong)
+    line = spec.line  # the line the file was checked with, or built now (ConfigError if wrong)
     # numba loads the kernels on their first call; the run's wall time is its solve's
     load_kernels()
     path = run_file(Path(outdir), spec)

@@ -85,7 +85,7 @@ def test_damping_given_directly():
     np.testing.assert_array_equal(line.damping_exponent, [0.0, 0.5])
     # an elastic line stays the paper's
     (spec,) = runs(CHAIN + "alpha = 1.5\n")
-    assert spec.chain is None and not spec.line.is_damped
+    assert spec.is_paper and not spec.line.is_damped
 
 
 def test_generators_and_elastic_contacts():

@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from chainrun import generators, runner, store
 from chainrun.cli import main
-from chainrun.config import Walls, build_line, load_experiment, parse_experiment
+from chainrun.config import load_experiment, parse_experiment
 from chainrun.errors import ConfigError
 from chainrun.materials import MATERIALS
 from chainrun.solver import Diagnostics, Outcome, Solution, physics
@@ -355,10 +355,32 @@ def test_a_line_at_rest_is_terminal_at_once():
 
 def test_paper_config_has_the_paper_line_and_its_old_hash():
     (spec,) = parse_experiment(HEAD + "[chain]\nn = 5\nk = 2\nalpha = 1.5\n", "toml").runs()
-    assert spec.chain is None and spec.units == "paper"
+    assert spec.is_paper and spec.units == "paper"
     assert spec.config["chain"] == {"n": 5, "k": 2, "alpha": 1.5} and "walls" not in spec.config
     line = spec.line
     assert line.is_paper and line.n == 5 and strikers(line) == 2
+
+
+def test_each_combination_is_validated_and_its_line_built_once(monkeypatch):
+    text = (HEAD + "[chain]\nn = 6\nk = 1\nalpha = 1.5\nmass = {random = \"uniform\", "
+            "low = 0.5, high = 1.5, seed = 1}\nrestitution = 0.9\ndamping_law = \"tsuji\"\n"
+            "[walls.right]\n[output]\ntimes = [0.0, 1.0]\n[sweep]\nreplicas = 3\n"
+            "\"solver.rtol\" = [1e-10, 1e-12]\n")
+    exp = parse_experiment(text, "toml")
+    import chainrun.config.run as run
+    from chainrun.config import Chain, SolverSettings, Walls
+
+    def again(*args, **kwargs):
+        raise AssertionError("checked or built again")
+
+    monkeypatch.setattr(run, "line_of", again)
+    for model in (Chain, Walls, SolverSettings):
+        monkeypatch.setattr(model, "model_validate", again)
+    specs = exp.runs()
+    assert len(specs) == 6 and not any(s.is_paper for s in specs)
+    lines = [s.line for s in specs]  # carried from the check, not built again
+    assert specs[0].for_check().line is lines[0]
+    assert len({float(line.mass[0]) for line in lines}) == 3
 
 
 def test_sweeps_of_new_keys():

@@ -156,3 +156,31 @@ def test_the_store_is_layered_and_writes_no_physics_of_its_own():
         if inner in STORE_LAYERS and inner != name and STORE_LAYERS[inner] >= STORE_LAYERS[name]:
             wrong.add((name, target))
     assert not wrong, sorted(wrong)
+
+
+#: the modules of chainrun.config, each importing only those before it: problems are
+#: worded, drives and tables checked, lines built, sweeps expanded, runs specified, the
+#: whole file validated, its text read (and the package re-exports the public names)
+CONFIG_ORDER = ["problems", "drives", "schema", "line", "sweeps", "run", "experiment", "text"]
+
+
+def test_the_config_package_imports_one_way():
+    modules = [name for name in _modules() if name.startswith("chainrun.config.")]
+    assert sorted(modules) == sorted(f"chainrun.config.{m}" for m in CONFIG_ORDER)
+    wrong = set()
+    for name, target in _imports():
+        if not name.startswith("chainrun.config.") or not target.startswith("chainrun.config."):
+            continue
+        src, dst = name.split(".")[2], target.split(".")[2]
+        if CONFIG_ORDER.index(dst) >= CONFIG_ORDER.index(src):
+            wrong.add((name, target))
+    assert not wrong, sorted(wrong)
+
+
+def test_line_building_stays_out_of_the_kernels():
+    from chainrun.solver._jit import kernel_sources
+
+    assert "build.py" not in {path.name for path in kernel_sources()}
+    importers = {name for name, target in _imports()
+                 if target.startswith("chainrun.solver.build")}
+    assert all(not name.startswith("chainrun.solver") for name in importers), importers
