@@ -413,10 +413,13 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
         contact the wave leaves each sensor ball through (``side``: 0 towards ball 1,
         1 away from it), and ``peak_mean_force``, the peak of the ball's mean force
         (what a sensor embedded in it measures); the wave's speed ``wave_speed`` and
-        its standard uncertainty ``wave_speed_error`` (balls per unit time; the
-        uncertainty is NaN with two sensors), and for spheres with diameters
-        ``wave_speed_si`` and ``wave_speed_si_error`` (m/s). Every variable has
-        ``units`` and ``long_name``; NaN where a pulse was not reached or was cut off.
+        its standard uncertainty ``wave_speed_error`` (balls per unit time, positive
+        towards ball N; the uncertainty is NaN with two sensors), and for spheres with
+        diameters ``wave_speed_si`` and ``wave_speed_si_error`` (m/s). Where the
+        sensors saw waves going both ways (a line struck from both ends), those are
+        the wave towards ball N's, and ``backward_wave_speed`` (``_error``, ``_si``,
+        ``_si_error``) the other's, each fitted alone. Every variable has ``units``
+        and ``long_name``; NaN where a pulse was not reached or was cut off.
 
     Raises
     ------
@@ -476,14 +479,22 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
                                                     "not a quantity): 0 towards ball 1, "
                                                     "1 away from it"})
     per_time = "ball/s" if si else "balls per unit time (paper units)"
-    speeds = [("wave_speed", p.speed, per_time, "balls per unit time")]
+    two = p.backward_speed.points > 0
+    way = " towards ball N" if two else ""
+    speeds = [("wave_speed", p.speed, per_time, "balls per unit time", way)]
     if p.speed_si is not None:
-        speeds.append(("wave_speed_si", p.speed_si, "m/s", "metres per second"))
-    for name, speed, units, what in speeds:
+        speeds.append(("wave_speed_si", p.speed_si, "m/s", "metres per second", way))
+    if two:
+        speeds.append(("backward_wave_speed", p.backward_speed, per_time,
+                       "balls per unit time", " towards ball 1"))
+        if p.backward_speed_si is not None:
+            speeds.append(("backward_wave_speed_si", p.backward_speed_si, "m/s",
+                           "metres per second", " towards ball 1"))
+    for name, speed, units, what, way in speeds:
         data[name] = ((), speed.value, {
-            "units": units, "long_name": f"wave speed in {what}: least-squares slope of "
-                                         f"the measured contacts' positions against their "
-                                         f"peak times ({speed.points} sensors)"})
+            "units": units, "long_name": f"wave speed{way} in {what}: least-squares slope "
+                                         f"of the measured contacts' positions against "
+                                         f"their peak times ({speed.points} sensors)"})
         data[f"{name}_error"] = ((), speed.error, {
             "units": units, "long_name": "standard uncertainty of the wave speed, from the "
                                          "fit's residuals (NaN with two sensors)"})

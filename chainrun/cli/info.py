@@ -93,19 +93,25 @@ def _pulse_lines(p) -> list[str]:
                      f"{t(p.peak_time[i])}, width (FWHM) {t(p.width[i])}, arrival "
                      f"{t(p.arrival_time[i])}; peak of the mean force "
                      f"{f(p.peak_mean_force[i])}")
-    speed = p.speed_si if p.speed_si is not None else p.speed
-    if speed.points >= 2 and np.isfinite(speed.value):
+    fits = [(p.speed_si if p.speed_si is not None else p.speed, "towards ball N"),
+            (p.backward_speed_si if p.backward_speed_si is not None else p.backward_speed,
+             "towards ball 1")]
+    seen = [(speed, way) for speed, way in fits
+            if speed.points >= 2 and np.isfinite(speed.value)]
+    for speed, way in seen:
+        # two waves: each one's way is said in words; one wave: its sign says it
+        v = abs(speed.value) if p.backward_speed.points else speed.value
         if p.speed_si is not None:
-            scaled = scale_for("velocity", "si", [speed.value])
-            value = f"{scaled(speed.value):.6g} {scaled.unit}"
+            scaled = scale_for("velocity", "si", [v])
+            value = f"{scaled(v):.6g} {scaled.unit}"
             error = (f" +- {scaled(speed.error):.2g} {scaled.unit}"
                      if np.isfinite(speed.error) else "")
         else:
-            value, error = f"{speed.value:.6g} balls per unit time", (
+            value, error = f"{v:.6g} balls per unit time", (
                 f" +- {speed.error:.2g}" if np.isfinite(speed.error) else "")
-        lines.append(f"wave speed {value}{error} (a fit through {speed.points} sensors' "
-                     "peak times" + ("; no uncertainty from two" if speed.points == 2
-                                     else "") + ")")
+        lines.append("wave speed " + (f"{way} " if p.backward_speed.points else "")
+                     + f"{value}{error} (a fit through {speed.points} sensors' peak times"
+                     + ("; no uncertainty from two" if speed.points == 2 else "") + ")")
     return [("pulses    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 
