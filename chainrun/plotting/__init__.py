@@ -19,6 +19,7 @@ state is involved.
 from __future__ import annotations
 
 import importlib
+import math
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -38,10 +39,12 @@ PDF_METADATA = {"Creator": "chainrun", "Producer": None, "CreationDate": None,
                 "ModDate": None}
 
 
-#: Line styles that go with the colour cycle of views, one per colour: two curves
-#: differ in style as well as in colour, in grey print and for colour-blind readers.
+#: Line styles that go with the colour cycle of views: two curves differ in style as
+#: well as in colour, in grey print and for colour-blind readers. Nine styles against
+#: ten colours: the pairs repeat only after 90 curves, so the eleventh curve is not
+#: the first one again.
 LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (1, 1)),
-              (0, (5, 2, 1, 2)), (0, (3, 1, 1, 1, 1, 1)), (0, (8, 2)))
+              (0, (5, 2, 1, 2)), (0, (8, 2)))
 
 
 @contextmanager
@@ -50,8 +53,8 @@ def style(colour: bool = False):
 
     The paper's figures are black and white, as the paper's are. ``colour`` gives the
     views of runs matplotlib's colour-blind-safe cycle ``petroff10`` (M. A. Petroff,
-    "Accessible Color Sequences for Data Visualization", 2024), each colour with a line
-    style of its own.
+    "Accessible Color Sequences for Data Visualization", 2024), with line styles that
+    make every curve of up to 90 one of its own (``LINESTYLES``).
     """
     import matplotlib
     import matplotlib.style
@@ -62,8 +65,11 @@ def style(colour: bool = False):
         matplotlib.style.use(STYLE)
         if colour:
             colours = matplotlib.style.library["petroff10"]["axes.prop_cycle"].by_key()["color"]
+            n = math.lcm(len(colours), len(LINESTYLES))
+            colours = colours * (n // len(colours))
+            styles = list(LINESTYLES) * (n // len(LINESTYLES))
             matplotlib.rcParams["axes.prop_cycle"] = (cycler(color=colours)
-                                                      + cycler(linestyle=LINESTYLES))
+                                                      + cycler(linestyle=styles))
         yield
 
 
