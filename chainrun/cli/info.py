@@ -276,17 +276,21 @@ def _sensors(run) -> list[str]:
     if not (line.drives or any(w is not None and w.motion is not None
                                for w in (line.left, line.right))):
         return _pulse_lines(measure_pulses(run))
-    from chainrun.analysis.transmission import measure
+    from chainrun.analysis.transmission import HARMONICS, measure
 
-    try:
-        steady = measure(run, harmonics=1)
-    except ChainrunError:
-        return []
-    return _steady_lines(steady, run.units)
+    # the API's fit (its harmonics), or as many harmonics as the sampling resolves
+    for harmonics in range(HARMONICS, 0, -1):
+        try:
+            return _steady_lines(measure(run, harmonics=harmonics), run.units)
+        except ChainrunError:
+            continue
+    return []
 
 
 def _steady_lines(tr, units: str) -> list[str]:
-    """The steady response at the drive's frequency: a line per sensor."""
+    """The steady response at the drive's frequency: a line per sensor, each that is
+    not steady (``chainrun.analysis.transmission.STEADY``) said so."""
+    from chainrun.analysis.transmission import MIN_PERIODS
     from chainrun.units import format_value
 
     head = (f"at f = {format_value(float(tr.frequency), 'frequency', units)}, over the "
@@ -294,9 +298,15 @@ def _steady_lines(tr, units: str) -> list[str]:
     lines = [head] + [
         f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
         f"{float(ph):.3f} rad, transmission {float(x):.4g}"
-        for ball, a, ph, x in zip(tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
-                                  tr.phase.sel(harmonic=1).values,
-                                  tr.transmission.sel(harmonic=1).values)]
+        + ("" if ok else f" (not steady: what the fit leaves is {float(r / a):.0%} of it)"
+           if a > 0 else " (not steady)")
+        for ball, a, ph, x, r, ok in zip(
+            tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
+            tr.phase.sel(harmonic=1).values, tr.transmission.sel(harmonic=1).values,
+            tr.residual.values, tr.steady.values)]
+    if int(tr.periods) < MIN_PERIODS:
+        lines.append(f"(fewer than {MIN_PERIODS} periods: no response is called steady; "
+                     "run longer)")
     return [("steady    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 
