@@ -192,7 +192,7 @@ def render(s, sensors=()) -> str:
         *sensors,
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor ball{'s' * (s.sensors != 1)} at {s.samples} "
-           "samples" if s.sensors else ""),
+           f"sample{'s' * (s.samples != 1)}" if s.sensors else ""),
     ]
     return "\n".join(lines)
 
@@ -294,7 +294,8 @@ def _steady_lines(tr, units: str) -> list[str]:
     from chainrun.units import format_value
 
     head = (f"at f = {format_value(float(tr.frequency), 'frequency', units)}, over the "
-            f"last {int(tr.periods)} periods (chainrun.transmission):")
+            f"last {int(tr.periods)} period{'s' * (int(tr.periods) != 1)} "
+            "(chainrun.transmission):")
     lines = [head] + [
         f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
         f"{float(ph):.3f} rad, transmission {float(x):.4g}"
