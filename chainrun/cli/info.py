@@ -192,7 +192,7 @@ def render(s, sensors=()) -> str:
         *sensors,
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor ball{'s' * (s.sensors != 1)} at {s.samples} "
-           f"sample{'s' * (s.samples != 1)}" if s.sensors else ""),
+           f"sample{'s' * bool(s.samples != 1)}" if s.sensors else ""),
     ]
     return "\n".join(lines)
 

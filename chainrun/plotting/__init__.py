@@ -165,16 +165,22 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
     return written
 
 
+#: The views of a sweep's folder as a whole (``render_sweep``).
+SWEEP_VIEWS = ("sweep-final", "sweep-runs", "ensemble", "transmission")
+
+
 def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
-                 ensemble=None, transmission=None) -> list[Path]:
+                 ensemble=None, transmission=None, views=None) -> list[Path]:
     """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
     ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
     final velocities of ``balls`` against each swept key (``sweep-final``); or, given
     the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
     differ only in their random seeds), its mean and spread (``ensemble``) instead of
     the latter. Given the transmission curve of a sweep over a drive's frequency
-    (``chainrun.transmission``), also that curve against the line's bands
-    (``transmission``). Returns the files written."""
+    (``chainrun.transmission``), that curve against the line's bands
+    (``transmission``) alone: the velocities where a driven run stops are a snapshot of
+    its oscillation, not a result. ``views`` (names of ``SWEEP_VIEWS``) picks among
+    those the sweep has. Returns the files written."""
     from chainrun.plotting.transmission import draw_transmission
     from chainrun.plotting.views import (
         describe,
@@ -186,19 +192,30 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
 
     folder = Path(folder)
     runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    if transmission is not None:
+        has = ["transmission"]
+    else:
+        has = ["ensemble" if ensemble is not None else "sweep-final", "sweep-runs"]
+    wanted = has if views is None else [v for v in views if v in has]
+    if views is not None and not wanted:
+        raise ChainrunError(f"{folder}: this sweep has no view {', '.join(views)} (it has "
+                            f"{', '.join(has)})")
     out = folder / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
     with style(colour=True):
-        first = (("ensemble", draw_ensemble(ensemble, runs[0])) if ensemble is not None
-                 else ("sweep-final", draw_sweep(runs, balls)))
-        figures = [first, ("sweep-runs", draw_sweep_runs(runs, log=log))]
-        if transmission is not None:
-            keys = runs[0].parameters.get("overrides", {})
-            title = "\n".join([runs[0].parameters.get("experiment", ""),
-                               describe(runs[0], keys, width=90)])
-            figures.append(("transmission", draw_transmission(transmission, title)))
-        for name, figure in figures:
+        for name in wanted:
+            if name == "ensemble":
+                figure = draw_ensemble(ensemble, runs[0])
+            elif name == "sweep-final":
+                figure = draw_sweep(runs, balls)
+            elif name == "sweep-runs":
+                figure = draw_sweep_runs(runs, log=log)
+            else:
+                keys = runs[0].parameters.get("overrides", {})
+                title = "\n".join([runs[0].parameters.get("experiment", ""),
+                                   describe(runs[0], keys, width=90)])
+                figure = draw_transmission(transmission, title)
             outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]
             _save(figure, outputs)
             written += outputs

@@ -98,5 +98,5 @@ def draw_transmission(ds, title: str = "") -> Figure:
               else f"{periods.min()}-{periods.max()}")
     axes.set_title("\n".join(filter(None, [
         title, f"At the drive's frequency: a least-squares fit over the last {fitted} "
-               f"period{'s' * (periods.max() != 1)} of each run"])), fontsize="small")
+               f"period{'s' * bool(periods.max() != 1)} of each run"])), fontsize="small")
     return figure

@@ -96,6 +96,20 @@ def test_chainrun_plot_draws_a_frequency_sweeps_transmission(sweep, tmp_path):
     assert result.exit_code == 0, result.output
     assert (tmp_path / "transmission.png").stat().st_size > 0
     assert (tmp_path / "transmission.pdf").stat().st_size > 0
+    # where a driven run stops its velocities are a phase of its oscillation: no
+    # figure of them against the frequency
+    assert not (tmp_path / "sweep-final.png").exists()
+    assert not (tmp_path / "sweep-runs.png").exists()
+    # the sweep's figure alone
+    alone = tmp_path / "alone"
+    result = CliRunner().invoke(main, ["plot", str(sweep), "--what", "transmission",
+                                       "-o", str(alone)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in alone.iterdir()) == ["transmission.pdf", "transmission.png"]
+    result = CliRunner().invoke(main, ["plot", str(sweep), "--what", "ensemble",
+                                       "-o", str(alone)])
+    assert result.exit_code == 2 and "has no view ensemble (it has transmission)" in \
+        result.output, result.output
 
 
 def test_runs_without_a_sine_or_sensors_are_refused_in_one_line(tmp_path):
