@@ -123,7 +123,8 @@ def _schedule_pair(S, j):
     parabola, c(s) = c + w s + a s^2 / 2 (even for balls parting now: pressed together,
     they meet again), and the collision is where it crosses 0 upwards (roots by the
     stable form of the quadratic formula). A meeting slower than the floor is no
-    collision, unless the balls are pressed together (a > 0), when it is one.
+    collision, unless the balls are pressed together (a > 0), when it is one; balls
+    overlapped and pressed together before their overlap ends meet now.
 
     A ball in a sealed collision meets its neighbour only after it ends, when the
     pair is scheduled again; until then the neighbour must stay clear of the pair.
@@ -167,6 +168,8 @@ def _schedule_pair(S, j):
     d = w * w - 2.0 * a * c
     q = -0.5 * (w + np.copysign(np.sqrt(d), w))  # roots q / (a/2) and c / q
     if not (d >= 0.0 and q != 0.0):
+        if c >= 0.0 and a > 0.0:
+            _heap_push(S, t, j)  # overlapped, and pressed together before they part
         return -1  # the gap never closes
     r1 = q / (0.5 * a)
     r2 = c / q
