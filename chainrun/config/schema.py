@@ -114,6 +114,16 @@ def rule_reason(key: str, x: float) -> str | None:
     return None
 
 
+def _material(value: Any) -> str:
+    """A material's name, one of ``chainrun.materials.MATERIALS``."""
+    name = check_str(value)
+    if name not in MATERIALS:
+        raise fail([Issue(f"unknown material {show_value(name)}"
+                          f"{suggest(name, list(MATERIALS))} (known: "
+                          f"{', '.join(MATERIALS)})")])
+    return name
+
+
 def _values(key: str, text: bool = False):
     """The validator of a per-ball or per-contact key: a scalar (checked now, kept a
     float or str), or a list or generator table (a ``generators.Values``)."""
@@ -128,12 +138,7 @@ def _values(key: str, text: bool = False):
             except ValuesError as exc:
                 raise fail([Issue(exc.reason, exc.sub)]) from None
         if text:
-            name = check_str(value)
-            if name not in MATERIALS:
-                raise fail([Issue(f"unknown material {show_value(name)}"
-                                    f"{suggest(name, list(MATERIALS))} (known: "
-                                    f"{', '.join(MATERIALS)})")])
-            return name
+            return _material(value)
         x = check_float(value)
         reason = rule_reason(key, x)
         if reason:
@@ -306,14 +311,7 @@ class WallSettings(BaseModel):
     @field_validator("material", mode="before")
     @classmethod
     def _material(cls, value: Any) -> str | None:
-        if value is None:
-            return None
-        name = check_str(value)
-        if name not in MATERIALS:
-            raise fail([Issue(f"unknown material {show_value(name)}"
-                                f"{suggest(name, list(MATERIALS))}"
-                                f" (known: {', '.join(MATERIALS)})")])
-        return name
+        return None if value is None else _material(value)
 
     @model_validator(mode="after")
     def _one_law(self) -> "WallSettings":
