@@ -15,7 +15,8 @@ as they are taken, so their number does not multiply the memory by N.
 Disk (``estimate_file_size``) counts the snapshots before compression, ``T * N * 2 * 8``
 bytes for positions and velocities, plus the per-ball results. Compression often
 shrinks this a lot (balls at rest compress to almost nothing), so a file larger than
-the free space is reported as a warning, not refused.
+the free space is reported as a warning, not refused; so is output above
+``LARGE_OUTPUT`` (1 GiB), with what would keep it small.
 """
 
 from __future__ import annotations
@@ -55,6 +56,10 @@ DAMPED_BYTES_PER_BALL = 4 * 8 + 5 * 8
 #: tiles ``TW`` (51 rows x 8), lane stiffnesses ``TR`` (8) and the balls' and lanes'
 #: parameters ``WP`` (7 x 8).
 WINDOW_BYTES_PER_BALL = 10 * 8 + 18 * 8 + 2 * 7 * 8 + (25 + 51 + 1) * 8 + 7 * 8
+#: Output above this many bytes before compression is worth a word before the run
+#: starts, even where the disk holds it: snapshots every nanosecond of a millisecond
+#: are more often a slip of units than a wish.
+LARGE_OUTPUT = 2**30
 #: Initial window (``_driver._INITIAL_WINDOW``); it grows with the width of the
 #: compressed region, which stays far below N (about N**(1/3) for alpha = 1).
 WINDOW_MIN = 256
@@ -242,13 +247,19 @@ def check_disk(n: int, n_snapshots: int, folder, free: int | None = None, *,
 
 
 def _disk_warning(size: int, runs: int, folder, free: int | None) -> str | None:
+    """A warning where the files may not fit on the disk, or are large enough that a
+    user asking for them may not have meant it (``LARGE_OUTPUT``); else None."""
     if free is None:
         free = free_disk(folder)
-    if free is None or size <= free:
-        return None
     what = "the run file" if runs <= 1 else f"the {runs} run files"
-    return (f"{what} may take up to {human_size(size)} before compression, "
-            f"and {human_size(free)} is free in {folder}")
+    if free is not None and size > free:
+        return (f"{what} may take up to {human_size(size)} before compression, "
+                f"and {human_size(free)} is free in {folder}")
+    if size > LARGE_OUTPUT:
+        return (f"{what} may take up to {human_size(size)} before compression (mostly "
+                f"snapshots: fewer output.times keep {'it' if runs <= 1 else 'them'} "
+                "small)")
+    return None
 
 
 def check_runs(specs, folder, *, runs_at_once: int = 1, available: int | None = None,

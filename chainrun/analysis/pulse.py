@@ -30,6 +30,10 @@ Definitions (every quantity in the run's own units):
   as the run ends, gives NaN, not an error;
 - a wave's *speed* is the least-squares slope of the positions of the contacts measured
   against their peak times, with its standard uncertainty from the fit's residuals.
+  Where the sensors saw waves travelling both ways (a line struck from both ends: a
+  sensor with a pulse on both contacts knows which way its wave went), each wave is
+  fitted alone, through the sensors that saw it go its way: one line through both
+  would be neither's speed.
 
 A sensor ball has two contacts, side 0 towards ball 1 and side 1 away from it. The
 wave arrives through one and leaves through the other; the *sensor's pulse* is that of
@@ -134,11 +138,16 @@ class Pulses:
         contact forces: what a sensor embedded in the ball measures).
     speed : WaveSpeed
         Balls per unit time: the fit of the measured contacts' positions, in balls
-        (the contact of balls b and b + 1 at b + 1/2), against their peak times.
+        (the contact of balls b and b + 1 at b + 1/2), against their peak times;
+        positive for a wave travelling towards ball N. Where the sensors saw waves
+        going both ways, the fit of the one towards ball N alone.
     speed_si : WaveSpeed or None
         m/s, for a run of spheres with diameters: the same fit with the positions in
         metres, from the centre-to-centre distances (the radii plus the gaps); a
         contact sits in the middle of its gap. None otherwise.
+    backward_speed, backward_speed_si : WaveSpeed, WaveSpeed or None
+        Where the sensors saw waves going both ways, the same for the wave towards
+        ball 1 (a negative slope); otherwise NaN with no points.
     arrival : float
         The fraction of the rise that defines the arrival time.
     """
@@ -154,6 +163,8 @@ class Pulses:
     speed: WaveSpeed
     speed_si: WaveSpeed | None
     arrival: float
+    backward_speed: WaveSpeed = WaveSpeed(_NAN, _NAN, 0)
+    backward_speed_si: WaveSpeed | None = None
 
 
 def parabola_peak(t, y, i: int) -> tuple[float, float]:
@@ -379,17 +390,30 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
 
     peak_time = np.array([p.peak_time for p in chosen])
     where = balls - 1 + side   # each measured contact: j joins balls j and j + 1
-    speed_si = None
-    if diameter is not None:
-        speed_si = wave_speed(contact_places(diameter, gap, wall_gap)[where], peak_time)
+    places = None if diameter is None else contact_places(diameter, gap, wall_gap)[where]
+
+    def speeds(used) -> tuple[WaveSpeed, WaveSpeed | None]:
+        """The fits through the sensors ``used``."""
+        times = np.where(used, peak_time, _NAN)
+        return (wave_speed(where + 0.5, times),
+                None if places is None else wave_speed(places, times))
+
+    # a sensor whose two contacts both had a pulse knows its wave's way (an end ball,
+    # or a ball the wave stops at, has one: its side says nothing of the way)
+    known = np.array([all(math.isfinite(q.onset) for q in pair) for pair in sides], bool)
+    if np.any(known & (side == 1)) and np.any(known & (side == 0)):
+        (speed, speed_si), (back, back_si) = speeds(known & (side == 1)), \
+            speeds(known & (side == 0))
+    else:
+        (speed, speed_si), back, back_si = speeds(True), WaveSpeed(_NAN, _NAN, 0), None
     return Pulses(
         units=units, balls=balls, side=side,
         peak_force=np.array([p.peak for p in chosen]), peak_time=peak_time,
         width=np.array([p.width for p in chosen]),
         arrival_time=np.array([p.arrival_time for p in chosen]),
         peak_mean_force=np.array([p.peak for p in mean]),
-        speed=wave_speed(where + 0.5, peak_time), speed_si=speed_si,
-        arrival=float(arrival))
+        speed=speed, speed_si=speed_si, arrival=float(arrival),
+        backward_speed=back, backward_speed_si=back_si)
 
 
 def _leaving_side(pair: list[Pulse]) -> int:

@@ -144,7 +144,8 @@ def describe_line(line, units: str) -> str:
     if np.any(line.gap):
         parts.append(f"gaps {_span(line.gap, quantity('gap'))}")
     if np.any(line.force):
-        parts.append(f"forces on {int(np.count_nonzero(line.force))} balls, "
+        forced = int(np.count_nonzero(line.force))
+        parts.append(f"forces on {forced} ball{'s' * (forced != 1)}, "
                      f"{_span(line.force[line.force != 0], quantity('force'))}")
     if np.any(line.damping):
         beta = _span(line.damping_exponent, lambda x: f"{x:g}")

@@ -21,6 +21,11 @@ sensors of a run (``output.sensors``) whose wall moves by a sine
   negative A is a phase of pi); the rms of what the fit leaves is ``residual``, the
   part of the signal that is not steady at f: the modes the start excited, and any
   other frequency;
+- a sensor's response is *steady* where that residual is at most ``STEADY`` (a tenth)
+  of its amplitude at f and the window holds at least ``MIN_PERIODS`` periods; deep in
+  a stop band, or where the start's transient has not passed, the amplitude is the
+  fit's reading of what is left of the transient, not a transmitted signal, and says
+  little of the line's transmission;
 - the *transmission* is each amplitude over the force the drive would put on a held
   ball, ``K_w |A|``: the drive's amplitude A times the linear stiffness ``K_w`` of the
   driven wall's contact at the static state (``chainrun.analysis.spectrum``). It is a
@@ -53,10 +58,15 @@ from chainrun.solver import Drive, Line, Wall
 from chainrun.store import RunData
 from chainrun.units import PAPER, UNITS
 
-__all__ = ["HARMONICS", "fit_harmonics", "fit_window", "measure", "measure_sweep"]
+__all__ = ["HARMONICS", "MIN_PERIODS", "STEADY", "fit_harmonics", "fit_window", "measure", "measure_sweep"]
 
 #: Harmonics fitted by default: the drive's frequency, and twice and three times it.
 HARMONICS = 3
+#: A response is steady where the fit's residual is at most this fraction of its
+#: amplitude at the drive's frequency ...
+STEADY = 0.1
+#: ... over a window of at least this many periods.
+MIN_PERIODS = 3
 #: Periods count as whole within this fraction of one (rounding in the sample times).
 _PERIOD_SLACK = 1e-9
 #: Variables of the linear spectrum, the same on every run of a sweep of one line.
@@ -225,8 +235,8 @@ def measure(run, *, harmonics: int = HARMONICS, start: float | None = None,
     xarray.Dataset
         Dimensions ``sensor`` (the sensor balls) and ``harmonic`` (1..harmonics).
         ``amplitude`` and ``phase`` (sensor, harmonic), ``transmission`` (sensor,
-        harmonic: amplitude over ``reference_force``), ``mean_force`` and
-        ``residual`` (sensor); scalars ``frequency``, ``drive_amplitude``,
+        harmonic: amplitude over ``reference_force``), ``mean_force``,
+        ``residual`` and ``steady`` (sensor); scalars ``frequency``, ``drive_amplitude``,
         ``reference_stiffness``, ``reference_force``, ``periods``, ``window_start``
         and ``window_end``; the line's linear spectrum in the drive's frequency unit:
         ``mode_frequency`` (mode) and, for a periodic line, ``band_bottom`` and
@@ -288,6 +298,11 @@ def measure(run, *, harmonics: int = HARMONICS, start: float | None = None,
         "residual": ("sensor", np.atleast_1d(residual), {
             "units": u["force"], "long_name": "rms of the force less the fit: what is not "
                                               "steady at the drive's harmonics"}),
+        "steady": ("sensor", (np.atleast_1d(residual) <= STEADY * amp[0])
+                   & (periods >= MIN_PERIODS), {
+            "long_name": f"whether the response is steady: the residual at most {STEADY:g} "
+                         f"of the amplitude at f, over at least {MIN_PERIODS} periods",
+            "residual_fraction": STEADY, "min_periods": MIN_PERIODS}),
         "frequency": ((), frequency, {"units": u["frequency"],
                                       "long_name": "the drive's frequency f"}),
         "drive_amplitude": ((), amplitude, {"units": u["position"],

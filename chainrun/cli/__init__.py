@@ -17,6 +17,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import atexit
 import gc
+import signal
 
 import click
 
@@ -55,6 +56,13 @@ def main():
     # (Unregistered first: one handler however often the group runs in a process.)
     atexit.unregister(gc.freeze)
     atexit.register(gc.freeze)
+    # A terminated run (a job's time limit, `timeout`, a closed terminal's SIGHUP) is an
+    # interrupted one: the files being written are discarded, not left half-written
+    # beside the finished ones, and the command says how far it got.
+    for name in ("SIGTERM", "SIGHUP"):
+        number = getattr(signal, name, None)
+        if number is not None and signal.getsignal(number) is signal.SIG_DFL:
+            signal.signal(number, signal.default_int_handler)
 
 
 main.add_command(simulate)

@@ -93,19 +93,25 @@ def _pulse_lines(p) -> list[str]:
                      f"{t(p.peak_time[i])}, width (FWHM) {t(p.width[i])}, arrival "
                      f"{t(p.arrival_time[i])}; peak of the mean force "
                      f"{f(p.peak_mean_force[i])}")
-    speed = p.speed_si if p.speed_si is not None else p.speed
-    if speed.points >= 2 and np.isfinite(speed.value):
+    fits = [(p.speed_si if p.speed_si is not None else p.speed, "towards ball N"),
+            (p.backward_speed_si if p.backward_speed_si is not None else p.backward_speed,
+             "towards ball 1")]
+    seen = [(speed, way) for speed, way in fits
+            if speed.points >= 2 and np.isfinite(speed.value)]
+    for speed, way in seen:
+        # two waves: each one's way is said in words; one wave: its sign says it
+        v = abs(speed.value) if p.backward_speed.points else speed.value
         if p.speed_si is not None:
-            scaled = scale_for("velocity", "si", [speed.value])
-            value = f"{scaled(speed.value):.6g} {scaled.unit}"
+            scaled = scale_for("velocity", "si", [v])
+            value = f"{scaled(v):.6g} {scaled.unit}"
             error = (f" +- {scaled(speed.error):.2g} {scaled.unit}"
                      if np.isfinite(speed.error) else "")
         else:
-            value, error = f"{speed.value:.6g} balls per unit time", (
+            value, error = f"{v:.6g} balls per unit time", (
                 f" +- {speed.error:.2g}" if np.isfinite(speed.error) else "")
-        lines.append(f"wave speed {value}{error} (a fit through {speed.points} sensors' "
-                     "peak times" + ("; no uncertainty from two" if speed.points == 2
-                                     else "") + ")")
+        lines.append("wave speed " + (f"{way} " if p.backward_speed.points else "")
+                     + f"{value}{error} (a fit through {speed.points} sensors' peak times"
+                     + ("; no uncertainty from two" if speed.points == 2 else "") + ")")
     return [("pulses    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 
@@ -186,7 +192,7 @@ def render(s, sensors=()) -> str:
         *sensors,
         f"stored    {stored}; the event log; final and separation velocities"
         + (f"; forces on {s.sensors} sensor ball{'s' * (s.sensors != 1)} at {s.samples} "
-           "samples" if s.sensors else ""),
+           f"sample{'s' * bool(s.samples != 1)}" if s.sensors else ""),
     ]
     return "\n".join(lines)
 
@@ -270,27 +276,38 @@ def _sensors(run) -> list[str]:
     if not (line.drives or any(w is not None and w.motion is not None
                                for w in (line.left, line.right))):
         return _pulse_lines(measure_pulses(run))
-    from chainrun.analysis.transmission import measure
+    from chainrun.analysis.transmission import HARMONICS, measure
 
-    try:
-        steady = measure(run, harmonics=1)
-    except ChainrunError:
-        return []
-    return _steady_lines(steady, run.units)
+    # the API's fit (its harmonics), or as many harmonics as the sampling resolves
+    for harmonics in range(HARMONICS, 0, -1):
+        try:
+            return _steady_lines(measure(run, harmonics=harmonics), run.units)
+        except ChainrunError:
+            continue
+    return []
 
 
 def _steady_lines(tr, units: str) -> list[str]:
-    """The steady response at the drive's frequency: a line per sensor."""
+    """The steady response at the drive's frequency: a line per sensor, each that is
+    not steady (``chainrun.analysis.transmission.STEADY``) said so."""
+    from chainrun.analysis.transmission import MIN_PERIODS
     from chainrun.units import format_value
 
     head = (f"at f = {format_value(float(tr.frequency), 'frequency', units)}, over the "
-            f"last {int(tr.periods)} periods (chainrun.transmission):")
+            f"last {int(tr.periods)} period{'s' * (int(tr.periods) != 1)} "
+            "(chainrun.transmission):")
     lines = [head] + [
         f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
         f"{float(ph):.3f} rad, transmission {float(x):.4g}"
-        for ball, a, ph, x in zip(tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
-                                  tr.phase.sel(harmonic=1).values,
-                                  tr.transmission.sel(harmonic=1).values)]
+        + ("" if ok else f" (not steady: what the fit leaves is {float(r / a):.0%} of it)"
+           if a > 0 else " (not steady)")
+        for ball, a, ph, x, r, ok in zip(
+            tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
+            tr.phase.sel(harmonic=1).values, tr.transmission.sel(harmonic=1).values,
+            tr.residual.values, tr.steady.values)]
+    if int(tr.periods) < MIN_PERIODS:
+        lines.append(f"(fewer than {MIN_PERIODS} periods: no response is called steady; "
+                     "run longer)")
     return [("steady    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
 
 

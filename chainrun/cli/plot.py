@@ -53,7 +53,10 @@ def _transmission(folder: Path):
                    "(velocity over ball and time), forces (contact force over contact and "
                    "time), profiles and displacements (along the line at some snapshot "
                    "times), final (final velocity of each ball), energy, sensors (the force "
-                   "sensors' traces) [default: every view the run has data for].")
+                   "sensors' traces); for a sweep's folder also sweep-final, sweep-runs, "
+                   "ensemble, transmission (naming only these draws no run's own views; "
+                   "naming none, the sweep's own are drawn too) [default: every view the "
+                   "runs have data for].")
 @click.option("--log", is_flag=True,
               help="For a run file or folder: final velocities on a (symmetric) log scale.")
 @click.option("--balls", default="1,-1", show_default=True, metavar="NUMBERS",
@@ -74,9 +77,11 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     velocities, the energy over time and the force sensors' traces, each as PNG and
     PDF (--what picks them); an output folder of a sweep also gets its final
     velocities against each swept key (sweep-final.png, --balls picks the balls) and
-    a panel per run (sweep-runs.png); a sweep of a wall's drive frequency with force
-    sensors also gets its transmission curve against the line's bands
-    (transmission.png, `chainrun.transmission`).
+    a panel per run (sweep-runs.png), or for an ensemble over seeds their mean and
+    spread (ensemble.png); a sweep of a wall's drive frequency with force sensors gets
+    its transmission curve against the line's bands instead (transmission.png,
+    `chainrun.transmission`): where a driven run stops, its velocities are a snapshot
+    of its oscillation.
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -89,6 +94,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
       chainrun plot results/cradle/run.h5            # -> results/cradle/figures/
       chainrun plot results/table1 --what final --log --balls 1,2,-1
       chainrun plot results/driven-dimer             # + transmission.png
+      chainrun plot results/driven-dimer --what transmission   # that figure alone
       chainrun plot --list
       chainrun plot fig05
       chainrun plot --all
@@ -113,11 +119,13 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                 click.echo(f"{'':28s}from: {inputs}")
                 click.echo(f"{'':28s}to:   {outputs or artefacts.analysis_path(a.name, results)}")
         return
-    from chainrun.plotting import render, render_run, render_sweep
+    from chainrun.plotting import SWEEP_VIEWS, render, render_run, render_sweep
 
     known = {a.name for a in artefacts.ALL}
     if names and all(name not in known and Path(name).exists() for name in names):
         views = None if what is None else [v.strip() for v in what.split(",") if v.strip()]
+        sweep_views = None if views is None else [v for v in views if v in SWEEP_VIEWS]
+        run_views = None if views is None else [v for v in views if v not in SWEEP_VIEWS]
         try:
             numbers = [int(b) for b in balls.split(",") if b.strip()]
         except ValueError:
@@ -128,14 +136,21 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                 if folder.is_dir() else [folder]
             if not files:
                 fail(f"{name}: no run files")
+            sweep = folder.is_dir() and len(files) > 1 and index_file(folder).is_file()
+            if sweep_views and not sweep:
+                fail(f"{name}: {', '.join(sweep_views)}: views of a sweep's folder, and "
+                     "this is not one")
             try:
-                for path in files:
-                    paths = render_run(path, views, out=out, log=log)
+                # naming only a sweep's views draws no run's own
+                only_sweep = views is not None and not run_views
+                for path in [] if only_sweep else files:
+                    paths = render_run(path, run_views, out=out, log=log)
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
-                if folder.is_dir() and len(files) > 1 and index_file(folder).is_file():
+                if sweep:
                     paths = render_sweep(folder, numbers, out=out, log=log,
                                          ensemble=_ensemble(folder),
-                                         transmission=_transmission(folder))
+                                         transmission=_transmission(folder),
+                                         views=sweep_views or None)
                     click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
             except ChainrunError as exc:
                 fail(str(exc))

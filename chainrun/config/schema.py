@@ -58,6 +58,9 @@ MAX_RANGE_TIMES = 10_000_000
 #: Most force samples a run may take (sample times by sensors): each is a row of the
 #: run file and of the solver's memory.
 MAX_SENSOR_SAMPLES = 10_000_000
+#: Fewer samples than this a sensor is no record of a pulse: a sampling interval given in
+#: the wrong unit (0.1 for 0.1 µs) more likely than a wish
+MIN_SENSOR_SAMPLES = 3
 
 
 
@@ -111,6 +114,16 @@ def rule_reason(key: str, x: float) -> str | None:
     return None
 
 
+def _material(value: Any) -> str:
+    """A material's name, one of ``chainrun.materials.MATERIALS``."""
+    name = check_str(value)
+    if name not in MATERIALS:
+        raise fail([Issue(f"unknown material {show_value(name)}"
+                          f"{suggest(name, list(MATERIALS))} (known: "
+                          f"{', '.join(MATERIALS)})")])
+    return name
+
+
 def _values(key: str, text: bool = False):
     """The validator of a per-ball or per-contact key: a scalar (checked now, kept a
     float or str), or a list or generator table (a ``generators.Values``)."""
@@ -125,12 +138,7 @@ def _values(key: str, text: bool = False):
             except ValuesError as exc:
                 raise fail([Issue(exc.reason, exc.sub)]) from None
         if text:
-            name = check_str(value)
-            if name not in MATERIALS:
-                raise fail([Issue(f"unknown material {show_value(name)}"
-                                    f"{suggest(name, list(MATERIALS))} (known: "
-                                    f"{', '.join(MATERIALS)})")])
-            return name
+            return _material(value)
         x = check_float(value)
         reason = rule_reason(key, x)
         if reason:
@@ -303,14 +311,7 @@ class WallSettings(BaseModel):
     @field_validator("material", mode="before")
     @classmethod
     def _material(cls, value: Any) -> str | None:
-        if value is None:
-            return None
-        name = check_str(value)
-        if name not in MATERIALS:
-            raise fail([Issue(f"unknown material {show_value(name)}"
-                                f"{suggest(name, list(MATERIALS))}"
-                                f" (known: {', '.join(MATERIALS)})")])
-        return name
+        return None if value is None else _material(value)
 
     @model_validator(mode="after")
     def _one_law(self) -> "WallSettings":
@@ -370,7 +371,8 @@ def _expand_range(table: Mapping[str, Any]) -> tuple[tuple[float, ...], list[Iss
     start, stop, step = got["start"], got["stop"], got["step"]
     m = (stop - start) / step  # inf when step is tiny (1e-308)
     if not m < MAX_RANGE_TIMES:
-        return (), [Issue(f"a range of {m + 1:.4g} times is too many (at most {MAX_RANGE_TIMES})")]
+        count = f"{math.floor(m) + 1}" if m < 1e15 else f"{m:.3g}"
+        return (), [Issue(f"a range of {count} times is too many (at most {MAX_RANGE_TIMES})")]
     steps = round(m) if abs(m - round(m)) <= 1e-9 * max(1.0, m) else math.floor(m)
     if steps + 1 > MAX_RANGE_TIMES:
         return (), [Issue(f"a range of {steps + 1} times is too many (at most {MAX_RANGE_TIMES})")]
@@ -532,9 +534,16 @@ def sensor_problems(output: "Output", t_end: float | None) -> list[Problem]:
                         "before it runs): say when sampling stops",
                         frozenset({"solver.t_end"}))]
     samples = sensor_count(output.sensors, output.sensor_dt, end)
+    where = "output.sensor_end" if output.sensor_end is not None else (
+        "solver.t_end" if t_end is not None else "output.times")
+    each = samples // len(output.sensors)
+    if each < MIN_SENSOR_SAMPLES:
+        return [Problem("output.sensor_dt", f"every {output.sensor_dt:g} up to {end:g} "
+                        f"({where}) gives {each} sample{'s' * (each != 1)} a sensor, too "
+                        f"few to see a pulse in (at least {MIN_SENSOR_SAMPLES}); sample "
+                        "more often (is it in the run's units?)",
+                        frozenset({"solver.t_end", "output.sensor_end"}))]
     if samples > MAX_SENSOR_SAMPLES:
-        where = "output.sensor_end" if output.sensor_end is not None else (
-            "solver.t_end" if t_end is not None else "output.times")
         return [Problem("output.sensor_dt", f"{len(output.sensors)} sensor{'s' * (len(output.sensors) != 1)} every "
                         f"{output.sensor_dt:g} up to {end:g} ({where}) take "
                         f"{samples:.3g} samples, too many (at most {MAX_SENSOR_SAMPLES:.0e}); "

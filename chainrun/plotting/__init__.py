@@ -19,6 +19,7 @@ state is involved.
 from __future__ import annotations
 
 import importlib
+import math
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -38,10 +39,12 @@ PDF_METADATA = {"Creator": "chainrun", "Producer": None, "CreationDate": None,
                 "ModDate": None}
 
 
-#: Line styles that go with the colour cycle of views, one per colour: two curves
-#: differ in style as well as in colour, in grey print and for colour-blind readers.
+#: Line styles that go with the colour cycle of views: two curves differ in style as
+#: well as in colour, in grey print and for colour-blind readers. Nine styles against
+#: ten colours: the pairs repeat only after 90 curves, so the eleventh curve is not
+#: the first one again.
 LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (1, 1)),
-              (0, (5, 2, 1, 2)), (0, (3, 1, 1, 1, 1, 1)), (0, (8, 2)))
+              (0, (5, 2, 1, 2)), (0, (8, 2)))
 
 
 @contextmanager
@@ -50,8 +53,8 @@ def style(colour: bool = False):
 
     The paper's figures are black and white, as the paper's are. ``colour`` gives the
     views of runs matplotlib's colour-blind-safe cycle ``petroff10`` (M. A. Petroff,
-    "Accessible Color Sequences for Data Visualization", 2024), each colour with a line
-    style of its own.
+    "Accessible Color Sequences for Data Visualization", 2024), with line styles that
+    make every curve of up to 90 one of its own (``LINESTYLES``).
     """
     import matplotlib
     import matplotlib.style
@@ -62,8 +65,11 @@ def style(colour: bool = False):
         matplotlib.style.use(STYLE)
         if colour:
             colours = matplotlib.style.library["petroff10"]["axes.prop_cycle"].by_key()["color"]
+            n = math.lcm(len(colours), len(LINESTYLES))
+            colours = colours * (n // len(colours))
+            styles = list(LINESTYLES) * (n // len(LINESTYLES))
             matplotlib.rcParams["axes.prop_cycle"] = (cycler(color=colours)
-                                                      + cycler(linestyle=LINESTYLES))
+                                                      + cycler(linestyle=styles))
         yield
 
 
@@ -159,16 +165,22 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
     return written
 
 
+#: The views of a sweep's folder as a whole (``render_sweep``).
+SWEEP_VIEWS = ("sweep-final", "sweep-runs", "ensemble", "transmission")
+
+
 def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
-                 ensemble=None, transmission=None) -> list[Path]:
+                 ensemble=None, transmission=None, views=None) -> list[Path]:
     """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
     ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
     final velocities of ``balls`` against each swept key (``sweep-final``); or, given
     the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
     differ only in their random seeds), its mean and spread (``ensemble``) instead of
     the latter. Given the transmission curve of a sweep over a drive's frequency
-    (``chainrun.transmission``), also that curve against the line's bands
-    (``transmission``). Returns the files written."""
+    (``chainrun.transmission``), that curve against the line's bands
+    (``transmission``) alone: the velocities where a driven run stops are a snapshot of
+    its oscillation, not a result. ``views`` (names of ``SWEEP_VIEWS``) picks among
+    those the sweep has. Returns the files written."""
     from chainrun.plotting.transmission import draw_transmission
     from chainrun.plotting.views import (
         describe,
@@ -180,19 +192,30 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
 
     folder = Path(folder)
     runs = [read_run(folder / str(row["file"])) for row in read_index(folder / "index.h5")]
+    if transmission is not None:
+        has = ["transmission"]
+    else:
+        has = ["ensemble" if ensemble is not None else "sweep-final", "sweep-runs"]
+    wanted = has if views is None else [v for v in views if v in has]
+    if views is not None and not wanted:
+        raise ChainrunError(f"{folder}: this sweep has no view {', '.join(views)} (it has "
+                            f"{', '.join(has)})")
     out = folder / "figures" if out is None else Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
     with style(colour=True):
-        first = (("ensemble", draw_ensemble(ensemble, runs[0])) if ensemble is not None
-                 else ("sweep-final", draw_sweep(runs, balls)))
-        figures = [first, ("sweep-runs", draw_sweep_runs(runs, log=log))]
-        if transmission is not None:
-            keys = runs[0].parameters.get("overrides", {})
-            title = "\n".join([runs[0].parameters.get("experiment", ""),
-                               describe(runs[0], keys, width=90)])
-            figures.append(("transmission", draw_transmission(transmission, title)))
-        for name, figure in figures:
+        for name in wanted:
+            if name == "ensemble":
+                figure = draw_ensemble(ensemble, runs[0])
+            elif name == "sweep-final":
+                figure = draw_sweep(runs, balls)
+            elif name == "sweep-runs":
+                figure = draw_sweep_runs(runs, log=log)
+            else:
+                keys = runs[0].parameters.get("overrides", {})
+                title = "\n".join([runs[0].parameters.get("experiment", ""),
+                                   describe(runs[0], keys, width=90)])
+                figure = draw_transmission(transmission, title)
             outputs = [out / f"{name}{suffix}" for suffix in (".png", ".pdf")]
             _save(figure, outputs)
             written += outputs

@@ -3,7 +3,8 @@
 ``draw_spectrum(ds)`` draws the Dataset ``chainrun.store.read_spectrum`` reads: the
 angular frequency of each normal mode against its number and, for a periodic line, the
 dispersion relation omega(q) beside it on the same frequency axis, its pass bands
-shaded and its gaps marked. Colours are the Okabe-Ito palette, which readers with any
+shaded and its gaps marked; the frequency f = omega / (2 pi) on a second axis at the
+right, in the unit drives are given in (Hz in SI). Colours are the Okabe-Ito palette, which readers with any
 common colour-vision deficiency tell apart. Each artist carries a ``gid`` naming the
 variable it shows.
 """
@@ -53,6 +54,18 @@ def _bands(axes, ds, scaled) -> None:
             axes.axhspan(top[b], bottom[b + 1], gid=f"gap/{b + 1}", **_GAP)
 
 
+def _hertz(axes, scaled, omega: np.ndarray, units: str) -> None:
+    """A second frequency axis on the right of ``axes``: f = omega / (2 pi), in its own
+    readable unit (Hz in SI, as drives are given), beside the angular one."""
+    label, in_hertz = axis_label(r"frequency $f = \omega / 2\pi$", "frequency", units,
+                                 omega / (2.0 * np.pi))
+    ratio = in_hertz(1.0) / scaled(1.0) / (2.0 * np.pi)  # f drawn per omega drawn
+    axis = axes.secondary_yaxis("right", functions=(lambda w: w * ratio,
+                                                    lambda f: f / ratio))
+    axis.set_ylabel(label)
+    axis.set_gid("frequency")
+
+
 def _name(ds) -> str:
     """The experiment and run a spectrum is of, from its attributes ("" if unknown)."""
     experiment, run_id = ds.attrs.get("experiment", ""), ds.attrs.get("run_id", "")
@@ -66,18 +79,20 @@ def draw_spectrum(ds) -> Figure:
     units = _units(ds)
     periodic = "dispersion" in ds
     values = [ds["omega"].values] + ([ds["dispersion"].values] if periodic else [])
+    omega = np.concatenate([np.ravel(v) for v in values])
     label, scaled = axis_label(r"angular frequency $\omega$", "angular_frequency", units,
-                               np.concatenate([np.ravel(v) for v in values]))
+                               omega)
     if not periodic:
-        figure = Figure()
+        figure = Figure(layout="constrained")
         axes = figure.add_subplot()
         _modes(axes, ds, scaled, label)
         axes.set_ylim(0.0, None)
+        _hertz(axes, scaled, omega, units)
         axes.set_title(f"{ds['mode'].size} normal modes of the line at rest")
         if _name(ds):
             figure.suptitle(_name(ds), fontsize="medium")
         return figure
-    figure = Figure(figsize=(8.4, 3.6))
+    figure = Figure(figsize=(8.4, 3.6), layout="constrained")
     left, right = figure.subplots(1, 2, sharey=True, width_ratios=(1.4, 1.0))
     _bands(left, ds, scaled)
     _modes(left, ds, scaled, label)
@@ -96,6 +111,7 @@ def draw_spectrum(ds) -> Figure:
     period = int(ds.attrs.get("period", ds["branch"].size))
     right.set_title(f"infinite line, {period} ball{'s' * (period != 1)} per cell")
     left.set_ylim(0.0, None)
+    _hertz(right, scaled, omega, units)
     handles = [left.get_lines()[0], Patch(label="pass band", **_BAND)]
     if any(a.get_gid().startswith("gap/") for a in left.patches):
         handles.append(Patch(label="band gap", **_GAP))

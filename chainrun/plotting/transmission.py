@@ -7,13 +7,16 @@ at rest: for a periodic line its stop bands (the gaps, and above the top band) s
 grey and hatched, the band edges dashed; the normal modes of the finite line as ticks
 along the top. Curves take the views' colour-blind-safe cycle (``petroff10``, a line
 style and a marker each), which the grey shading leaves apart. Each artist carries a ``gid``
-naming the variable it shows.
+naming the variable it shows. A point whose response is not steady (``steady``: the
+fit leaves too much, or too few periods) is drawn hollow: it is not a transmitted
+signal.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from chainrun.plotting.common import MARKERS
@@ -58,10 +61,25 @@ def draw_transmission(ds, title: str = "") -> Figure:
     axes = figure.add_subplot()
     handles = _bands(axes, ds, scaled, right)
     t = ds["transmission"].sel(harmonic=1).transpose("frequency", "sensor")
+    steady = (ds["steady"].transpose("frequency", "sensor") if "steady" in ds
+              else t.notnull())
     for i, ball in enumerate(ds["sensor"].values):
         (line,) = axes.plot(x, t.sel(sensor=ball).values, label=f"ball {ball}",
                             gid=f"transmission/{ball}", **MARKERS[i % len(MARKERS)])
         handles.insert(i, line)
+        loose = ~steady.sel(sensor=ball).values
+        if loose.any():  # the same markers, hollow: not a transmitted signal
+            axes.plot(x[loose], t.sel(sensor=ball).values[loose], linestyle="none",
+                      marker=line.get_marker(), markersize=line.get_markersize() + 1,
+                      markerfacecolor="white", markeredgecolor=line.get_color(),
+                      gid=f"not_steady/{ball}")
+    if not bool(steady.all()):
+        rule = steady.attrs
+        handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="white",
+                              markeredgecolor="0.2",
+                              label=f"not steady (residual over {rule['residual_fraction']:g} "
+                                    f"of the amplitude, or under {rule['min_periods']} "
+                                    "periods)"))
     left = float(x.min() - 0.03 * (x.max() - x.min()))
     shown = modes[(scaled(modes) >= left) & (scaled(modes) <= right)]
     axes.plot(scaled(shown), np.ones_like(shown), transform=axes.get_xaxis_transform(),
@@ -80,5 +98,5 @@ def draw_transmission(ds, title: str = "") -> Figure:
               else f"{periods.min()}-{periods.max()}")
     axes.set_title("\n".join(filter(None, [
         title, f"At the drive's frequency: a least-squares fit over the last {fitted} "
-               f"periods of each run"])), fontsize="small")
+               f"period{'s' * bool(periods.max() != 1)} of each run"])), fontsize="small")
     return figure

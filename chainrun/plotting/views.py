@@ -61,7 +61,34 @@ def _law(alpha: np.ndarray) -> str:
 #: The quantity of a swept key's values, by its last part (for its axis's unit).
 _SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "diameter",
                    "gap": "gap", "force": "force", "t_end": "time", "mass": "mass",
-                   "restitution_speed": "velocity"}
+                   "restitution_speed": "velocity", "frequency": "frequency",
+                   "amplitude": "position", "ramp": "time"}
+
+#: a legend of more entries than this, or of longer labels, goes beside the axes,
+#: where it hides no curve
+_LEGEND_INSIDE = 4
+_LEGEND_LABEL = 24
+
+
+def _legend(axes) -> None:
+    """The axes' legend: inside them where it is short, else beside them."""
+    labels = axes.get_legend_handles_labels()[1]
+    if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
+        axes.legend(fontsize="small")
+    else:
+        axes.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                    borderaxespad=0.0)
+
+
+def _symlog(axes, values) -> None:
+    """A symmetric log scale over ``values`` (linear below the smallest non-zero
+    magnitude), with room above and below the extreme points and no negative half
+    where nothing is negative."""
+    small = np.abs(values[values != 0.0])
+    axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
+                                            1e-12))
+    top, bottom = float(np.max(values, initial=0.0)), float(np.min(values, initial=0.0))
+    axes.set_ylim(2.0 * bottom, 2.0 * top if top > 0.0 else None)
 
 
 def _drawn(table, quantity: str, units: str) -> str | None:
@@ -202,7 +229,7 @@ def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str) -
     axes.set_xlabel("ball")
     _integer_axis(axes.xaxis)
     axes.set_ylabel(label)
-    axes.legend(fontsize="small")
+    _legend(axes)
 
 
 def _profiles(run, figure: Figure, axes) -> None:
@@ -223,7 +250,7 @@ def _sensors(run, figure: Figure, axes) -> None:
     for s, ball in enumerate(run.sensor_balls):
         axes.plot(t, scaled(mean[:, s]), label=f"ball {ball}", gid=f"sensor/{ball}")
     axes.set_ylabel(label)
-    axes.legend(fontsize="small")
+    _legend(axes)
 
 
 def _final_name(runs) -> str:
@@ -247,9 +274,7 @@ def _final(run, figure: Figure, axes, log: bool) -> None:
     _integer_axis(axes.xaxis)
     axes.set_ylabel(label)
     if log:
-        small = np.abs(scaled(v)[v != 0.0])
-        axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
-                                                1e-12))
+        _symlog(axes, scaled(v))
 
 
 def _energy(run, figure: Figure, axes) -> None:
@@ -270,7 +295,7 @@ def _energy(run, figure: Figure, axes) -> None:
     label, scaled = axis_label("energy", "energy", run.units,
                                np.concatenate([kinetic, stored, total, work]))
     t = _time_axis(axes, run, run.times)(run.times)
-    contacts = "in contacts and walls"
+    contacts = "in contacts and walls" if run.line.walls != (None, None) else "in contacts"
     if np.any(run.line.position) and not driven:
         contacts += " (above the static state)"
     if np.any(run.line.force):
@@ -286,7 +311,7 @@ def _energy(run, figure: Figure, axes) -> None:
     axes.plot(t, scaled(total), label="sum less the drives' work" if np.any(work) else "sum",
               color="black", linestyle="-", linewidth=1.4, gid="total_energy")
     axes.set_ylabel(label)
-    axes.legend(fontsize="small")
+    _legend(axes)
 
 
 def draw_view(run, view: str, *, log: bool = False) -> Figure:
@@ -387,9 +412,7 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
         axes.tick_params(labelsize="x-small")
         _integer_axis(axes.xaxis)
         if log:
-            small = np.abs(v[v != 0.0])
-            axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size
-                                                    else 1.0, 1e-12))
+            _symlog(axes, np.asarray(v))
     figure.supxlabel("ball", fontsize="small")
     figure.supylabel(label, fontsize="small")
     return figure

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from chainrun.solver import (
+from chainrun.solver.result import (
     DEFAULT_RTOL,
     Diagnostics,
     Outcome,

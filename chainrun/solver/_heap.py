@@ -54,14 +54,9 @@ def _heap_swap(S, a, b):
     S.hp_s[a], S.hp_s[b] = S.hp_s[b], S.hp_s[a]
 
 
-@kernel
-def _heap_pop(S):
-    n = S.ints[I_NHEAP] - 1
-    S.ints[I_NHEAP] = n
-    if n == 0:
-        return
-    _heap_swap(S, 0, n)
-    i = 0
+@kernel(inline="always")
+def _sift_down(S, i, n):
+    """Move entry i of a heap of n entries down to its place."""
     while True:
         l = 2 * i + 1
         if l >= n:
@@ -74,6 +69,16 @@ def _heap_pop(S):
             break
         _heap_swap(S, i, c)
         i = c
+
+
+@kernel
+def _heap_pop(S):
+    n = S.ints[I_NHEAP] - 1
+    S.ints[I_NHEAP] = n
+    if n == 0:
+        return
+    _heap_swap(S, 0, n)
+    _sift_down(S, 0, n)
 
 
 @kernel
@@ -100,19 +105,7 @@ def _heap_compact(S):
     S.ints[I_NHEAP] = k
     # re-heapify
     for i in range(k // 2 - 1, -1, -1):
-        q = i
-        while True:
-            l = 2 * q + 1
-            if l >= k:
-                break
-            r = l + 1
-            c = l
-            if r < k and S.hp_t[r] < S.hp_t[l]:
-                c = r
-            if S.hp_t[q] <= S.hp_t[c]:
-                break
-            _heap_swap(S, q, c)
-            q = c
+        _sift_down(S, i, k)
 
 
 @kernel
@@ -123,7 +116,8 @@ def _schedule_pair(S, j):
     parabola, c(s) = c + w s + a s^2 / 2 (even for balls parting now: pressed together,
     they meet again), and the collision is where it crosses 0 upwards (roots by the
     stable form of the quadratic formula). A meeting slower than the floor is no
-    collision, unless the balls are pressed together (a > 0), when it is one.
+    collision, unless the balls are pressed together (a > 0), when it is one; balls
+    overlapped and pressed together before their overlap ends meet now.
 
     A ball in a sealed collision meets its neighbour only after it ends, when the
     pair is scheduled again; until then the neighbour must stay clear of the pair.
@@ -167,6 +161,8 @@ def _schedule_pair(S, j):
     d = w * w - 2.0 * a * c
     q = -0.5 * (w + np.copysign(np.sqrt(d), w))  # roots q / (a/2) and c / q
     if not (d >= 0.0 and q != 0.0):
+        if c >= 0.0 and a > 0.0:
+            _heap_push(S, t, j)  # overlapped, and pressed together before they part
         return -1  # the gap never closes
     r1 = q / (0.5 * a)
     r2 = c / q

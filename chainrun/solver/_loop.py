@@ -43,7 +43,7 @@ from chainrun.solver._state import (
     F_WSTEP, HI_ROW, I_DAMPED, I_DIRTY, I_DRIVEN, I_EVJ, I_EVK, I_EVTOTAL, I_FORCED,
     I_HAVEOUT, I_JUMP, I_LWL, I_M, I_MAXEV, I_NCL, I_NDRIVE, I_NEED, I_NEV, I_NSAME, I_NSEAL,
     I_PAIRS, I_POST, I_REJ, I_RWL, I_SEALED, I_STEPS, I_TASK, I_TAY, I_XEND, KV_DS,
-    MODE_MIXED, PT, SEALED, SERIES_CLUSTERS,
+    MODE_MIXED, OPEN, PT, SEALED, SERIES_CLUSTERS,
     ST_DEFECT, ST_EVENT_LIMIT, ST_FLUSH, ST_GROW, ST_NON_FINITE, ST_OUTPUT, ST_STEP_UNDERFLOW, ST_STOP_TIME,
     ST_TERMINAL, ST_YIELD, TASK_RUN, TASK_SNAPSHOT, W_ETA, W_HELD, YIELD_STEPS, _flight, _free_at,
     _tw,
@@ -341,6 +341,22 @@ def _release_quiet(S):
 
 
 @kernel(inline="always")
+def _pressed_back(S, j, c, w):
+    """Whether the pair of contact j, overlapped by c > 0 (within rounding) and parting
+    at w < 0, is pressed back together before its compression reaches 0: the two balls
+    alone in their cluster, their external forces pressing them (a > 0) and the
+    compression's parabola c + w s + a s^2 / 2 with no root. Opened, such a pair would
+    stay overlapped as free balls, with no crossing of 0 for a collision to be
+    predicted at (``_heap._schedule_pair``): it stays in contact instead."""
+    if not (c > 0.0 and S.ints[I_FORCED] == 1):
+        return False
+    if (j > 0 and S.cst[j - 1] != OPEN) or (j + 1 < S.cst.shape[0] and S.cst[j + 1] != OPEN):
+        return False
+    a = S.bp[B_ACC, j] - S.bp[B_ACC, j + 1]
+    return a > 0.0 and w * w < 2.0 * a * c
+
+
+@kernel(inline="always")
 def _due(S, j):
     """The event contact j is due at this instant, if its state disagrees with its motion.
 
@@ -361,7 +377,7 @@ def _due(S, j):
     r = _rounding(abs(xl) + abs(xr) + abs(dl) + abs(dr)) + 4.0 * EPS * abs(t) * abs(w)
     st = S.cst[j]
     if st == ACTIVE:
-        if (c <= r and w < 0.0) or c < -r:
+        if c < -r or (c <= r and w < 0.0 and not _pressed_back(S, j, c, w)):
             return EV_OPEN
     elif st == FRESH:
         if c < -r:

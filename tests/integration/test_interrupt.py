@@ -1,8 +1,9 @@
 """Interrupting chainrun at random moments never leaves a file that lies.
 
-``chainrun simulate`` runs in a real subprocess and is sent SIGINT or SIGKILL at a
-random moment of a long run or of a sweep; every file then found under a final
-name must be a complete run or index file. Then the same command, run again,
+``chainrun simulate`` runs in a real subprocess and is sent SIGINT, SIGTERM or SIGKILL
+at a random moment of a long run or of a sweep; every file then found under a final
+name must be a complete run or index file, and a signal the process can handle leaves
+no partial file behind. Then the same command, run again,
 finishes the experiment (a sweep resumes).
 """
 
@@ -58,7 +59,8 @@ def _check_final_files(outdir: Path) -> int:
     return found
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
+                         ids=["SIGINT", "SIGTERM", "SIGKILL"])
 def test_random_interruptions_leave_only_whole_files(tmp_path, sig):
     rng = random.Random(20261121 + int(sig))
     config = tmp_path / "interrupted.toml"
@@ -72,8 +74,11 @@ def test_random_interruptions_leave_only_whole_files(tmp_path, sig):
         if proc.returncode == 0:
             break  # finished before the signal: still checked below
         assert proc.returncode != 0
-        if sig == signal.SIGINT:
+        if sig != signal.SIGKILL:
+            # an interruption it can see: said in one line, its partial files removed
             assert "Traceback" not in err, err
+            assert "interrupted" in err or "chainrun: error" in err, err
+            assert not list(outdir.glob(".*.partial-*"))
         _check_final_files(outdir)
     # the same command completes the experiment, reusing what was finished
     proc = _start(config, outdir)

@@ -131,6 +131,7 @@ def test_the_figure_draws_what_the_file_holds():
     with style():
         figure = draw_spectrum(ds)
     modes, bands = figure.axes
+    (hertz,) = bands.child_axes
     (line,) = [a for a in modes.get_lines() if a.get_gid() == "omega"]
     np.testing.assert_array_equal(line.get_xdata(), ds.mode.values)
     np.testing.assert_array_equal(line.get_ydata(), ds.omega.values)  # paper units: as is
@@ -141,6 +142,23 @@ def test_the_figure_draws_what_the_file_holds():
     gaps = [p for p in bands.patches if p.get_gid() == "gap/1"]
     assert len(gaps) == 1
     assert modes.get_ylabel() == r"angular frequency $\omega$ (paper units)"
+    assert hertz.get_gid() == "frequency" and "paper units" in hertz.get_ylabel()
+
+
+def test_an_si_figure_gives_the_frequency_in_hertz_beside_omega():
+    ds = chainrun.spectrum(units="si", chain={"n": 12, "k": 0, "diameter": 0.008,
+                                              "material": "stainless_steel",
+                                              "precompression": 5.0},
+                           walls={"left": {"material": "steel"}, "right": {"material": "steel"}})
+    with style():
+        figure = draw_spectrum(ds)
+    modes, bands = figure.axes
+    (hertz,) = bands.child_axes
+    assert modes.get_ylabel() == r"angular frequency $\omega$ (krad/s)"
+    assert hertz.get_ylabel() == r"frequency $f = \omega / 2\pi$ (kHz)"
+    top = float(ds.omega.max())
+    to_hertz = hertz._functions[0]
+    assert to_hertz(top / 1e3) == pytest.approx(top / (2 * np.pi) / 1e3, rel=1e-12)
 
 
 def test_help_has_examples(cli):

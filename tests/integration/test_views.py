@@ -294,3 +294,43 @@ def test_the_energy_sum_of_a_damped_run_is_flat(beads):
     initial = 0.5 * float(beads.line.mass @ beads.line.velocity ** 2)
     assert obs["dissipated_energy"][-1] > 0.2 * initial  # the damping took a real share
     np.testing.assert_allclose(total, initial, rtol=1e-9)
+
+
+def test_no_two_of_ninety_curves_look_alike():
+    """Eleven sensors or profiles must not repeat the first curve's colour and style."""
+    from matplotlib.figure import Figure
+
+    with style(colour=True):
+        axes = Figure().add_subplot()
+        lines = [axes.plot([0, 1], [i, i])[0] for i in range(90)]
+        looks = {(a.get_color(), str(a._unscaled_dash_pattern)) for a in lines}
+    assert len(looks) == 90
+
+
+def test_a_log_scale_keeps_every_point_inside_and_no_empty_negative_half(wave):
+    path, raw = wave
+    with style():
+        axes = draw_view(read_run(path), "final", log=True).axes[0]
+    bottom, top = axes.get_ylim()
+    v = raw["final"]
+    assert top > v.max() and bottom < v.min()
+    forward = v.copy()
+    forward[forward < 0] = 0.0
+    from chainrun.plotting.views import _symlog
+    from matplotlib.figure import Figure
+
+    axes = Figure().add_subplot()
+    axes.plot(np.arange(v.size), forward)
+    _symlog(axes, forward)
+    bottom, top = axes.get_ylim()
+    assert bottom == 0.0 and top > forward.max()
+
+
+def test_a_long_legend_stands_beside_the_axes(beads):
+    """Six profiles, or the energy view's long labels, would hide curves inside."""
+    with style(colour=True):
+        figure = draw_view(beads, "profiles")
+    legend = figure.axes[0].get_legend()
+    figure.canvas.draw()  # (a legend's place is known once drawn)
+    box = legend.get_window_extent()
+    assert box.x0 >= figure.axes[0].get_window_extent().x1

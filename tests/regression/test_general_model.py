@@ -260,14 +260,12 @@ def test_forces_as_small_as_a_float_can_be(n, k, force, left):
     np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-14)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "solver defect: contact 1 opens at t = 14.28 with its balls parting at a speed "
-    "within rounding while their forces press them together; the free pair's "
-    "collision is then predicted by a quadratic with no real root (the gap never "
-    "opens), none is scheduled, and the balls pass through each other"))
-def test_a_pressed_pair_opened_by_rounding_closes_again():
+def test_a_pair_pressed_together_stays_in_contact_when_rounding_parts_it():
     # Found by the long fuzzer run. Ball 2's force presses it into ball 1 harder than
-    # ball 1's own force; the run must keep them in contact (energy balanced).
+    # ball 1's own force. At t = 14.28 their contact, overlapped within rounding, parts
+    # at a speed within rounding; opened there, the free pair's overlap would never end
+    # (its parabola has no root), no collision would be predicted, and the balls would
+    # pass through each other. The run must keep them in contact (energy balanced).
     line = Line.make(4, mass=[0.3263181348015897, 0.6902918792318835, 0.6902918792318835,
                               1.6125278115106167],
                      stiffness=0.7916631989634783,

@@ -63,6 +63,8 @@ def test_above_the_cutoff_the_drive_decays_by_the_linear_rate_per_ball(ratio):
     np.testing.assert_allclose(np.abs(np.angle(np.exp(1j * np.diff(phase)))), math.pi,
                                atol=3e-3)
     assert int(t.periods) in (49, 50) and t.transmission.sel(sensor=7, harmonic=1) < 1e-2
+    if ratio == 1.2:  # (at 1.5 ball 7's force, |r|^5 of ball 2's, is not 10 x the rest)
+        assert t.steady.all()
 
 
 def test_below_the_cutoff_the_finite_chain_transmits_its_forced_response():
@@ -86,6 +88,9 @@ def test_below_the_cutoff_the_finite_chain_transmits_its_forced_response():
                                                      - expected)))[clear], 0.0, atol=1e-2)
     np.testing.assert_allclose(t.transmission.sel(harmonic=1).values, amp / (K * A))
     assert float(t.transmission.sel(sensor=n, harmonic=1)) > 0.1
+    # steady where the force is clear of its node; at the node what is left of the
+    # start's modes outweighs the little force at f
+    assert t.steady.values[clear].all() and not t.steady.sel(sensor=10)
 
 
 DIMER = """

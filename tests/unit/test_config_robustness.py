@@ -91,6 +91,21 @@ def test_a_range_of_too_many_times(step):
                         line)
 
 
+def test_a_range_one_past_the_limit_says_its_count():
+    (line,) = problems(CHAIN + "[output]\ntimes = {start = 0, stop = 1, step = 1e-7}\n")
+    assert line == "output.times: a range of 10000001 times is too many (at most 10000000)"
+
+
+@pytest.mark.parametrize("dt, end, each", [(0.1, 1e-3, 1), (6e-4, 1e-3, 2)])
+def test_a_sensor_sampled_too_rarely_to_see_a_pulse(dt, end, each):
+    # 0.1 for 0.1 us: one sample, and info said only "no whole pulse recorded"
+    (line,) = problems(CHAIN + f"[output]\nsensors = [2]\nsensor_dt = {dt}\n"
+                               f"sensor_end = {end}\n")
+    assert line == (f"output.sensor_dt: every {dt:g} up to {end:g} (output.sensor_end) gives "
+                    f"{each} sample{'s' * (each != 1)} a sensor, too few to see a pulse in "
+                    "(at least 3); sample more often (is it in the run's units?)")
+
+
 @pytest.mark.parametrize("fmt, text", [
     ("toml", 'name = "x"\nchain = ' + "[" * 5000 + "]" * 5000),
     ("toml", 'name = "x"\nchain = ' + "{a = " * 5000 + "1" + "}" * 5000),

@@ -184,3 +184,59 @@ def test_line_building_stays_out_of_the_kernels():
     importers = {name for name, target in _imports()
                  if target.startswith("chainrun.solver.build")}
     assert all(not name.startswith("chainrun.solver") for name in importers), importers
+
+
+#: the solver's modules in layers (docs/design.md, "The solver's layers"): each imports
+#: only modules of lower layers. The kernels (0-9, ``_loop`` on top) are compiled into
+#: one library and import nothing of the Python side but ``drive``'s constants; the
+#: Python side describes a line (``model``, ``build``), its formulas (``physics``,
+#: ``restitution``) and results (``result``), and drives the kernels (``_driver``) for
+#: the package's one entry point (``chainrun.solver``: ``simulate``)
+SOLVER_LAYERS = {
+    "_jit": 0,
+    "_state": 1, "drive": 1,
+    "_forces": 2, "_compression": 2, "_drive": 2, "model": 2, "_codegen": 2,
+    "_generated": 3, "physics": 3, "restitution": 3, "result": 3,
+    "_steppers": 4, "_pair_damped": 4, "build": 4,
+    "_events": 5, "_pairs": 5, "_projection": 5,
+    "_heap": 6,
+    "_clusters": 7,
+    "_binary": 8,
+    "_loop": 9,
+    "_driver": 10,
+    "": 11,  # the package itself
+}
+#: the Python side: no kernel is compiled from these
+SOLVER_PYTHON_SIDE = {"model", "physics", "restitution", "result", "build", "_codegen",
+                      "_driver", ""}
+
+
+def _solver_module(dotted: str) -> str | None:
+    """The solver module a dotted name lives in ("" for the package's own names)."""
+    if dotted != "chainrun.solver" and not dotted.startswith("chainrun.solver."):
+        return None
+    rest = dotted.removeprefix("chainrun.solver").removeprefix(".").split(".")[0]
+    return rest if rest in SOLVER_LAYERS else ""
+
+
+def test_the_solver_is_layered():
+    modules = {_solver_module(m) for m in _modules() if _solver_module(m) is not None}
+    assert modules == set(SOLVER_LAYERS)
+    wrong = set()
+    for name, target in _imports():
+        src, dst = _solver_module(name), _solver_module(target)
+        if src is None or dst is None or src == dst:
+            continue
+        if SOLVER_LAYERS[dst] >= SOLVER_LAYERS[src]:
+            wrong.add((name, target))
+    assert not wrong, sorted(wrong)
+
+
+def test_the_kernels_are_compiled_from_the_kernel_modules_alone():
+    from chainrun.solver._jit import kernel_sources
+
+    compiled = {path.stem for path in kernel_sources()}
+    assert "_loop" in compiled and not compiled & SOLVER_PYTHON_SIDE
+    # every module below _loop that is not on the Python side is compiled into it
+    assert compiled == {m for m, layer in SOLVER_LAYERS.items()
+                        if layer <= SOLVER_LAYERS["_loop"]} - SOLVER_PYTHON_SIDE

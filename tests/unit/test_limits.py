@@ -172,7 +172,13 @@ def test_memory_available_reads_meminfo_and_falls_back(tmp_path, monkeypatch):
 def test_disk_space_is_reported(tmp_path):
     size = limits.estimate_file_size(10**6, 1000)
     assert size >= 1000 * 10**6 * 2 * 8
-    assert limits.check_disk(10**6, 1000, tmp_path, free=size + 1) is None
+    small = limits.estimate_file_size(10**4, 1000)
+    assert small < limits.LARGE_OUTPUT
+    assert limits.check_disk(10**4, 1000, tmp_path, free=small + 1) is None
+    # output that fits, but is large: said, with what keeps it small
+    assert limits.check_disk(10**6, 1000, tmp_path, free=size + 1) == (
+        f"the run file may take up to {size / GB:.1f} GB before compression (mostly "
+        "snapshots: fewer output.times keep it small)")
     warning = limits.check_disk(10**6, 1000, tmp_path, free=10 * GB)
     assert warning == (f"the run file may take up to {size / GB:.1f} GB before compression, "
                        f"and 10.0 GB is free in {tmp_path}")
@@ -193,7 +199,9 @@ def test_check_runs_of_a_sweep(tmp_path):
         'times = {start = 0, stop = 99, step = 1}\n[sweep]\n"chain.n" = [10, 1000000, 100]\n',
         "toml")
     specs = exp.runs()
-    assert limits.check_runs(specs, tmp_path, available=8 * GB, free=100 * GB) == []
+    (warning,) = limits.check_runs(specs, tmp_path, available=8 * GB, free=100 * GB)
+    assert warning.endswith("(mostly snapshots: fewer output.times keep them small)")
+    assert limits.check_runs(specs[:1], tmp_path, available=8 * GB, free=100 * GB) == []
     big = limits.estimate_run_memory(10**6, 100)
     with pytest.raises(ChainrunError, match="N = 1000000 balls with 100 snapshots"):
         limits.check_runs(specs, tmp_path, available=big - 1, free=100 * GB)

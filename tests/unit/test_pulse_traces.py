@@ -187,6 +187,32 @@ def test_run_sensors_on_unequal_spheres_with_gaps():
         np.testing.assert_allclose(p.peak_mean_force, 0.5, rtol=1e-6)
 
 
+def test_waves_going_both_ways_are_fitted_apart():
+    """Balls struck from both ends of a line of 30: the sensors near ball 1 see the
+    wave going towards ball N first, those near ball 30 the other; each wave's speed
+    comes from its own sensors (one line through all four would be neither's)."""
+    t = np.arange(0.0, 40.0, DT)
+    c = 1.25                                     # balls per unit time, both waves
+    sensors = np.array([5, 10, 20, 25])
+    force = np.zeros((t.size, sensors.size, 2))
+    for s, ball in enumerate(sensors):
+        for side in (0, 1):
+            j = ball - 1 + side                  # contact j at j + 1/2 balls
+            when = (j + 0.5) / c if ball < 15 else (30.0 - (j + 0.5)) / c
+            force[:, s, side] = sech2(t, when + 2.0, 0.3)
+    p = measure_pulses(_run(30, sensors, t, force))
+    np.testing.assert_array_equal(p.side, [1, 1, 0, 0])
+    assert p.speed.value == pytest.approx(c, rel=1e-6) and p.speed.points == 2
+    assert p.backward_speed.value == pytest.approx(-c, rel=1e-6)
+    assert p.backward_speed.points == 2
+    from chainrun.api import pulses
+
+    ds = pulses(_run(30, sensors, t, force))
+    assert ds.wave_speed.item() == pytest.approx(c, rel=1e-6)
+    assert ds.backward_wave_speed.item() == pytest.approx(-c, rel=1e-6)
+    assert "towards ball 1" in ds.backward_wave_speed.attrs["long_name"]
+
+
 def test_run_sensors_at_the_ends_and_without_sensors():
     """At an end ball the outer side carries nothing: the inner one is measured. A run
     in the paper's units has no speed in m/s; a run without sensors is an error."""
