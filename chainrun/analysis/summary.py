@@ -60,6 +60,7 @@ class RunSummary:
     their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
     (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
     the run's conditioning check (``chainrun.check.Check``), None for a run without one.
+    ``walls`` is how many walls the line has (0, 1 or 2).
     """
 
     path: str
@@ -101,6 +102,7 @@ class RunSummary:
     file_bytes: int
     line: str
     check: Check | None = None
+    walls: int = 0
 
     @property
     def dissipated(self) -> float:
@@ -250,6 +252,7 @@ def summarize(run) -> RunSummary:
         last_time=float(run.times[-1]) if run.times.size else math.nan,
         file_bytes=os.path.getsize(run.path),
         line=describe_line(line, run.units),
+        walls=sum(w is not None for w in line.walls),
         check=run.check,
     )
 

@@ -47,6 +47,8 @@ def _shares(s) -> str:
         energy = {"kinetic": energy.pop("rebound") + energy.pop("ejected")
                   + energy.pop("left behind"), **energy}
     names = {**_SHARE_NAMES, "kinetic": "kinetic"}
+    if not s.walls:
+        names["contacts"] = "in contacts"
     shares = ", ".join(f"{names[name]} {share:.2%}" for name, share in energy.items()
                        if name != "dissipated" or share)
     when = "" if s.terminal else f" at t = {format_value(s.end_time, 'time', s.units, 6)}"
