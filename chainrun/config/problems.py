@@ -130,6 +130,15 @@ def check_str(value: Any) -> str:
 # --- pydantic errors -> one-line problems -------------------------------------------------
 
 
+def _elsewhere(loc: tuple[str, ...], models: Mapping[tuple[str, ...], type[BaseModel]]) -> str:
+    """Where an unknown key is a key of another table (``chain.sensors`` is
+    ``output.sensors``, a top-level ``n`` is ``chain.n``), as a suggestion; else ""."""
+    for where, model in models.items():
+        if where != loc[:-1] and where and loc[-1] in model.model_fields:
+            return f" (did you mean '{'.'.join(where + (loc[-1],))}'?)"
+    return ""
+
+
 def translate(exc: ValidationError, models: Mapping[tuple[str, ...], type[BaseModel]],
               prefix: tuple[str, ...] = ()) -> list[Problem]:
     """Each pydantic error as a ``key: reason`` problem (never pydantic's own text).
@@ -158,7 +167,7 @@ def translate(exc: ValidationError, models: Mapping[tuple[str, ...], type[BaseMo
         elif kind == "extra_forbidden":
             model = models.get(loc[:-1])
             choices = list(model.model_fields) if model else []
-            reason = f"unknown key{suggest(loc[-1], choices)}"
+            reason = f"unknown key{suggest(loc[-1], choices) or _elsewhere(loc, models)}"
         elif kind == "invalid_key":
             key = ".".join(loc[:-1]) or "top level"
             reason = f"unknown key {show_value(error['loc'][-1])} (keys must be text)"

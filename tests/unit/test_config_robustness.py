@@ -91,6 +91,13 @@ def test_a_range_of_too_many_times(step):
                         line)
 
 
+def test_a_key_in_the_wrong_table_is_pointed_to_its_own():
+    text = 'name = "x"\nn = 20\n[chain]\nn = 3\nk = 1\nalpha = 1.5\nsensors = [2]\n'
+    assert sorted(problems(text)) == [
+        "chain.sensors: unknown key (did you mean 'output.sensors'?)",
+        "n: unknown key (did you mean 'chain.n'?)"]
+
+
 def test_a_range_one_past_the_limit_says_its_count():
     (line,) = problems(CHAIN + "[output]\ntimes = {start = 0, stop = 1, step = 1e-7}\n")
     assert line == "output.times: a range of 10000001 times is too many (at most 10000000)"
