@@ -15,7 +15,8 @@ from pydantic_core import PydanticCustomError
 from chainrun.check import check_rtol
 from chainrun.config.drives import SINE_KEYS, DriveSpec
 from chainrun.config.problems import Issue, check_int, key_text, suggest
-from chainrun.config.schema import RULES, SCALAR_CHECKS
+from chainrun.config.schema import (RULES, SCALAR_CHECKS, Chain, Output,
+                                    SolverSettings, WallSettings)
 from chainrun.errors import show_value
 from chainrun.generators import Values
 from chainrun.solver import DEFAULT_RTOL
@@ -92,6 +93,24 @@ def sweep_type(key: str) -> type | None:
     return None if generator is None else GENERATOR_FIELDS[generator[1]]
 
 
+#: The tables of an experiment and their models: a key of one of them that cannot be
+#: swept is said to be one, not an unknown key.
+_TABLES = {"chain": Chain, "walls.left": WallSettings, "walls.right": WallSettings,
+           "output": Output, "solver": SolverSettings}
+
+
+def _not_sweepable(key: str) -> str:
+    """Why ``key`` cannot be swept: a key of the experiment that is not among the
+    sweepable ones (with those of its table), or no key at all (with the closest)."""
+    table, _, name = key.rpartition(".")
+    model = _TABLES.get(table)
+    if model is not None and name in model.model_fields:
+        same = [k for k in SWEEPABLE_KEYS if k.rpartition(".")[0] == table]
+        return (f"'{key}' cannot be swept" + (f" (of {table}, these can: {', '.join(same)})"
+                                               if same else ""))
+    return f"unknown key '{key}'{suggest(key, [*SWEEPABLE_KEYS, REPLICAS])}"
+
+
 def _flatten_sweep(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
     """``{"chain": {"k": [...]}}`` (TOML's unquoted ``chain.k = [...]``) as ``chain.k``.
 
@@ -134,8 +153,7 @@ def check_sweep(value: Any) -> tuple[dict[str, tuple[Any, ...]], set[str], list[
                 valid["replica"] = tuple(range(count))
             continue
         if sweep_type(key) is None:
-            issues.append(Issue(f"unknown key '{key}'"
-                                f"{suggest(key, [*SWEEPABLE_KEYS, REPLICAS])}"))
+            issues.append(Issue(_not_sweepable(key)))
             continue
         sub = (key,)
         if key in named:  # "chain.k" and chain = {k = ...} in one table

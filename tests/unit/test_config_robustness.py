@@ -98,6 +98,15 @@ def test_a_key_in_the_wrong_table_is_pointed_to_its_own():
         "n: unknown key (did you mean 'chain.n'?)"]
 
 
+def test_a_key_that_cannot_be_swept_is_not_called_unknown():
+    (line,) = problems(CHAIN + '[sweep]\n"walls.left.material" = ["steel", "glass"]\n')
+    assert line.startswith("sweep: 'walls.left.material' cannot be swept (of walls.left, "
+                           "these can: walls.left.stiffness, ")
+    assert line.count("walls.left.material") == 1
+    (line,) = problems(CHAIN + '[sweep]\n"output.sensors" = [[1], [2]]\n')
+    assert line == "sweep: 'output.sensors' cannot be swept"
+
+
 def test_a_range_one_past_the_limit_says_its_count():
     (line,) = problems(CHAIN + "[output]\ntimes = {start = 0, stop = 1, step = 1e-7}\n")
     assert line == "output.times: a range of 10000001 times is too many (at most 10000000)"
