@@ -14,6 +14,8 @@ from chainrun.errors import ChainrunError
 _EVENT_NAMES = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
                 "ENGAGE": "engagements", "UNLOAD": "unloadings (a damped force at 0)",
                 "RELOAD": "reloadings"}
+#: A run's outcome in a folder's table, where its value is not a word already.
+_OUTCOME_NAMES = {"stop_time": "at t_end"}
 _SHARE_NAMES = {"rebound": "rebound", "ejected": "ejected", "left behind": "left behind",
                 "contacts": "in contacts and walls", "dissipated": "dissipated"}
 
@@ -235,15 +237,18 @@ def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
     time = scale_for("time", units, [s.end_time for s in summaries])
     speed = scale_for("velocity", units, [s.forward[1] if s.forward else 0.0
                                            for s in summaries])
-    head = (f"{'file':<24} {'N':>7} {'K':>4} {'outcome':<10} {'end (' + time.unit + ')':>14} "
-            f"{'events':>8} {'forward (' + speed.unit + ')':>16}")
+    wide = max(24, *(len(Path(s.path).name) for s in summaries))
+    head = (f"{'file':<{wide}} {'N':>7} {'K':>4} {'outcome':<10} "
+            f"{'end (' + time.unit + ')':>14} {'events':>8} "
+            f"{'forward (' + speed.unit + ')':>16}")
     checked = any(s.check is not None for s in summaries)
     if checked:
         head += f" {'hold to 1e-9':>13}"
     lines = [f"{path}: {len(summaries)} runs", head]
     for s in summaries:
         forward = s.forward[1] if s.forward else 0.0
-        lines.append(f"{Path(s.path).name:<24} {s.n:>7} {s.k:>4} {s.outcome:<10} "
+        outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
+        lines.append(f"{Path(s.path).name:<{wide}} {s.n:>7} {s.k:>4} {outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
                      f"{speed(forward):>16.6g}" + (f" {_holding(s):>13}" if checked else ""))
     if not ensemble:
@@ -349,6 +354,8 @@ def info(paths: tuple[Path, ...]):
         for i, path in enumerate(paths):
             if i:
                 click.echo()
+            if path.name == INDEX_NAME:  # an output folder named by its index
+                path = path.parent
             if path.is_dir():
                 index = path / INDEX_NAME
                 if not index.is_file():

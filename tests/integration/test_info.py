@@ -88,6 +88,26 @@ def test_an_output_folder_has_a_line_per_run(table1):
         assert (int(row[1]), int(row[2]), row[3]) == (5, k, "terminal")
         assert float(row[-1]) == pytest.approx(v.max(), rel=1e-5)
     assert len(lines) == 6 and "standard deviation" not in result.stdout
+    # the folder named by its index is the folder
+    assert info(table1 / "index.h5").stdout == result.stdout
+
+
+def test_a_folder_of_long_run_ids_keeps_its_columns(tmp_path):
+    from helpers import simulate_text
+
+    out = simulate_text(tmp_path, 'name = "long"\n[chain]\nn = 4\nk = 1\nalpha = 1.5\n'
+                                  'damping_law = "tsuji"\n[solver]\nt_end = 1.0\n'
+                                  '[sweep]\n"chain.restitution" = [0.9, 0.95]\n'
+                                  '"chain.speed" = [0.125]\n')
+    lines = info(out).stdout.splitlines()
+    head, rows = lines[1], lines[2:4]
+    assert len(max(rows, key=len).split()[0]) > 24          # ids longer than the column
+    # every column of numbers ends where its heading does: N = 4 and K = 1 under theirs
+    for name, value in (("N", "4"), ("K", "1")):
+        end = head.index(f" {name} ") + 1 + len(name)
+        assert all(row[:end].split()[-1] == value and row[end] == " " for row in rows), \
+            (head, rows)
+    assert all(" at t_end " in row for row in rows)
 
 
 def test_what_is_not_a_run_is_refused_in_one_line(tmp_path):
