@@ -33,15 +33,19 @@ from chainrun.cli.spectrum import spectrum
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="chainrun")
 def main():
-    """Exact, event-driven experiments on a line of touching balls struck at one end.
+    """Exact, event-driven experiments on a line of balls: struck, driven or at rest.
 
-    N equal balls touch in a line; the first K move at velocity 1 and hit the rest.
-    Contacts push with force (compression)^alpha and never pull (alpha = 1 linear,
-    1.5 Hertz). chainrun locates every contact opening and closing, integrates only
-    the balls that touch, and runs each line to its terminal state.
+    Balls of any masses touch (or nearly) in a line, between walls or not; some
+    strike the rest, or a wall shakes them. Contacts push with k (compression)^alpha
+    and never pull (alpha = 1 linear, 1.5 Hertz: real beads in SI from their
+    material and diameter), damped or elastic. chainrun locates every contact
+    opening and closing, integrates only the balls that touch, and runs each line to
+    its terminal state (or its stop time). The paper's line (N equal balls, the
+    first K at velocity 1) is its first example.
 
     \b
     Examples:
+      chainrun simulate configs/examples/damped-cradle.toml   # steel beads in SI
       chainrun simulate configs/table1.toml          # the paper's Table 1
       chainrun simulate my.yaml -o results/mine --jobs 2
       chainrun simulate --help                       # the experiment file format

@@ -48,7 +48,22 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
 
     Each run goes to OUTDIR/<run_id>.h5 (H5MD 1.1: snapshots, contact events,
     final and separation velocities, diagnostics), and OUTDIR/index.h5 lists them
-    all. A minimal experiment file:
+    all. Two minimal experiment files, real beads in SI and the paper's line in its
+    units (every coefficient 1):
+
+    \b
+      name = "beads"
+      units = "si"
+      [chain]
+      n = 30
+      k = 1                  # striking balls, at chain.speed
+      speed = 0.5            # m/s
+      diameter = 0.008       # m: masses and Hertz contacts from the material
+      material = "stainless_steel"
+      [output]
+      times = {start = 0, stop = 3e-4, step = 2e-6}      # s
+      sensors = [10, 20]     # force sensors: chainrun info gives their pulses
+      sensor_dt = 2e-7
 
     \b
       name = "cradle"
