@@ -7,7 +7,7 @@ killed by the kernel's out-of-memory handler half-way through. It reads only
 solver nor h5py.
 
 Memory (``estimate_run_memory``) counts the solver's state arrays of length N
-(``chainrun.solver._driver._new_state``: about twenty float64 and int64 arrays, one per
+(``chainrun.solver._setup._new_state``: about twenty float64 and int64 arrays, one per
 ball, contact or cluster), the compact window of integrated balls, one snapshot and the
 results being written, and the snapshot times. Snapshots are streamed to the run file
 as they are taken, so their number does not multiply the memory by N.
@@ -39,7 +39,7 @@ __all__ = [
     "memory_available",
 ]
 
-#: Bytes per ball of the solver's state (``_driver._new_state``): float64 ``bx, bv, bt,
+#: Bytes per ball of the solver's state (``_setup._new_state``): float64 ``bx, bv, bt,
 #: sep_t, sep_v, ox, ov`` and int64 ``bmap, jbuf`` (9 x 8), the heap ``hp_t, hp_j,
 #: hp_s`` (3N each: 9 x 8), ``freed`` (2N int64: 16), one contact per ball (``cst``
 #: int8, ``lvl`` float64, ``stamp`` int64: 17), N/2 clusters (``clo, chi, coff`` int64
@@ -50,7 +50,7 @@ STATE_BYTES_PER_BALL = 9 * 8 + 9 * 8 + 16 + 17 + 16 + 3 * 8 + 5 * 8 + 6 * 8
 #: Bytes per ball more on a damped line: ``cp`` has 9 rows (4 x 8 more: damping, its
 #: exponent, the held state and the energy dissipated) and ``sl`` 11 (5 x 8 more).
 DAMPED_BYTES_PER_BALL = 4 * 8 + 5 * 8
-#: Bytes per ball of the window of integrated balls (``_driver._alloc_window``): ``cb``,
+#: Bytes per ball of the window of integrated balls (``_setup._alloc_window``): ``cb``,
 #: ``X, V, A, X0, V0, A0, XS, FS, DM`` (10 x 8), ``KV`` (16 stages and 2 rows of a damped
 #: line's x 8), ``FX, FV`` (2 x 7 x 8), the Taylor series ``TX`` (25 orders x 8), its work
 #: tiles ``TW`` (51 rows x 8), lane stiffnesses ``TR`` (8) and the balls' and lanes'
@@ -60,7 +60,7 @@ WINDOW_BYTES_PER_BALL = 10 * 8 + 18 * 8 + 2 * 7 * 8 + (25 + 51 + 1) * 8 + 7 * 8
 #: starts, even where the disk holds it: snapshots every nanosecond of a millisecond
 #: are more often a slip of units than a wish.
 LARGE_OUTPUT = 2**30
-#: Initial window (``_driver._INITIAL_WINDOW``); it grows with the width of the
+#: Initial window (``_setup._INITIAL_WINDOW``); it grows with the width of the
 #: compressed region, which stays far below N (about N**(1/3) for alpha = 1).
 WINDOW_MIN = 256
 #: Bytes per ball of one snapshot in flight and the results: the observables'

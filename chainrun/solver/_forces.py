@@ -151,7 +151,7 @@ def _damped_forces(X, V, F, MK, WP, DS, wgt, m, mode, alpha):
     weight of the step's quadrature) to DS: summed over the stages of a step with
     DOP853's weights, the energy it dissipated over the step, to the method's order.
     (A lane held at 0 dissipates the elastic energy it still stores as its compression
-    goes: _loop._commit_dissipation counts that exactly, from the step's ends.)
+    goes: _output._commit_dissipation counts that exactly, from the step's ends.)
     """
     AL, ETA, BETA, HELD = WP[W_ALPHA], WP[W_ETA], WP[W_BETA], WP[W_HELD]
     for p in range(m - 1):

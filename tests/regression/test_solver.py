@@ -322,16 +322,15 @@ def test_steps_over_an_event_land_on_it():
 
 
 def _stopped_state(n, k, alpha, t_end):
-    from chainrun.solver import _driver as D
-    from chainrun.solver import _loop, _state
+    from chainrun.solver import _loop, _setup, _state
 
-    S = D._new_state(n, k, alpha, 1e-12, t_end, None)
+    S = _setup._new_state(n, k, alpha, 1e-12, t_end, None)
     while True:
         status = _loop.advance(S)
         if status == _state.ST_FLUSH:
             S.ints[_state.I_NEV] = 0
         elif status == _state.ST_GROW:
-            S = D._grow(S, int(S.ints[_state.I_NEED]))
+            S = _setup._grow(S, int(S.ints[_state.I_NEED]))
         elif status != _state.ST_YIELD:
             return S
 
@@ -541,12 +540,11 @@ def test_gap_closing_within_the_time_resolution(alpha):
     """Late in a long run t is resolved only to about 1e-12: two free balls whose gap
     closes sooner than that collide at the present instant, still a hair apart. The
     contact must stay closed (it used to open at once and close again, forever)."""
-    from chainrun.solver import _driver as D
-    from chainrun.solver import _heap, _loop, _state
+    from chainrun.solver import _heap, _loop, _setup, _state
 
     t0, w, gap = 7159.550196, 0.3, 1e-13
     assert t0 + gap / w == t0  # the collision is at the present instant
-    S = D._new_state(2, 1, alpha, 1e-12, None, None)
+    S = _setup._new_state(2, 1, alpha, 1e-12, None, None)
     S.cst[0] = _state.OPEN
     S.ints[_state.I_NCL] = 0
     S.ints[_state.I_DIRTY] = 0
@@ -636,9 +634,9 @@ def test_a_contact_defect_is_its_own_status_not_another_growth():
     growth of the window had left in ints[I_NEED]: the driver then grew the window
     again and went on, the event dropped without a word."""
     from chainrun.solver import _driver as D
-    from chainrun.solver import _loop, _state
+    from chainrun.solver import _loop, _setup, _state
 
-    S = D._new_state(6, 1, 1.5, 1e-12, 10.0, None)
+    S = _setup._new_state(6, 1, 1.5, 1e-12, 10.0, None)
     S.ints[_state.I_NEED] = 3  # what a real growth of the window leaves behind
     # no room for a cluster: the closing below cannot be applied
     S = S._replace(clo=S.clo[:0].copy())

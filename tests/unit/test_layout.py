@@ -197,9 +197,9 @@ SOLVER_LAYERS = {
     "_state": 1, "drive": 1,
     "_forces": 2, "_compression": 2, "_drive": 2, "model": 2, "_codegen": 2,
     "_generated": 3, "physics": 3, "restitution": 3, "result": 3,
-    "_steppers": 4, "_pair_damped": 4, "build": 4,
+    "_steppers": 4, "_pair_damped": 4, "build": 4, "_setup": 4,
     "_events": 5, "_pairs": 5, "_projection": 5,
-    "_heap": 6,
+    "_heap": 6, "_output": 6,
     "_clusters": 7,
     "_binary": 8,
     "_loop": 9,
@@ -208,7 +208,7 @@ SOLVER_LAYERS = {
 }
 #: the Python side: no kernel is compiled from these
 SOLVER_PYTHON_SIDE = {"model", "physics", "restitution", "result", "build", "_codegen",
-                      "_driver", ""}
+                      "_setup", "_driver", ""}
 
 
 def _solver_module(dotted: str) -> str | None:

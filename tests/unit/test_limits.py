@@ -17,15 +17,15 @@ GB = 10**9
 
 def state_bytes(n: int) -> int:
     """Bytes of the arrays the solver allocates for N balls, counted on the real state."""
-    from chainrun.solver import _driver
+    from chainrun.solver import _setup
 
-    state = _driver._new_state(n, 1, 1.5, 1e-12, None, None)
+    state = _setup._new_state(n, 1, 1.5, 1e-12, None, None)
     return sum(a.nbytes for a in state if isinstance(a, np.ndarray))
 
 
 @pytest.mark.parametrize("n", [10, 1000, 100_000])
 def test_the_estimate_covers_the_solver_state(n):
-    """The estimate counts at least what ``_driver._new_state`` allocates, and not far more.
+    """The estimate counts at least what ``_setup._new_state`` allocates, and not far more.
 
     If this fails after a change of the solver's state, update the constants of
     ``chainrun.limits`` (bytes per ball, window) to match.
@@ -37,14 +37,14 @@ def test_the_estimate_covers_the_solver_state(n):
 
 
 def test_the_bytes_per_ball_are_the_solvers_own():
-    """The per-ball constants are those of the arrays ``_driver`` allocates: what grows
+    """The per-ball constants are those of the arrays ``_setup`` allocates: what grows
     with N in the state, and with the capacity in the window of integrated balls."""
-    from chainrun.solver import _driver
+    from chainrun.solver import _setup
 
     small, large = 10_000, 20_000
     per_ball = (state_bytes(large) - state_bytes(small)) / (large - small)
-    window = (sum(a.nbytes for a in _driver._alloc_window(2048).values())
-              - sum(a.nbytes for a in _driver._alloc_window(1024).values())) / 1024
+    window = (sum(a.nbytes for a in _setup._alloc_window(2048).values())
+              - sum(a.nbytes for a in _setup._alloc_window(1024).values())) / 1024
     assert per_ball == limits.STATE_BYTES_PER_BALL
     assert window == limits.WINDOW_BYTES_PER_BALL
 
@@ -52,11 +52,11 @@ def test_the_bytes_per_ball_are_the_solvers_own():
 def test_a_damped_lines_bytes_per_ball_are_the_solvers_own():
     """A damped line's state holds more per ball (the damping's rows of the contacts'
     parameters and of the sealed collisions' closed forms): what the estimate adds."""
-    from chainrun.solver import Line, _driver
+    from chainrun.solver import Line, _setup
 
     def damped_bytes(n):
         line = Line.make(n, k=1, alpha=1.5, damping=0.1, damping_exponent=0.5)
-        state = _driver._line_state(_driver._Prepared(line), 1e-12, None, None)
+        state = _setup._line_state(_setup._Prepared(line), 1e-12, None, None)
         return sum(a.nbytes for a in state if isinstance(a, np.ndarray))
 
     small, large = 10_000, 20_000
@@ -123,9 +123,9 @@ def test_force_samples_are_counted_at_the_solvers_own_bytes():
     two neighbours, positions and velocities, in buffers that double) and what is
     written (two forces and their mean): the estimate counts each, and a run with too
     many says which keys to change."""
-    from chainrun.solver import Line, _driver
+    from chainrun.solver import Line, _driver, _setup
 
-    P = _driver._Prepared(Line.make(20, k=1, alpha=1.5))
+    P = _setup._Prepared(Line.make(20, k=1, alpha=1.5))
     sensors = _driver._Sensors(np.array([5, 12]), 0.1, None, P)
     taken = 3000
     for i in range(taken):
