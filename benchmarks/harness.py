@@ -316,6 +316,12 @@ print(json.dumps(dict(rc=rc, wall=wall, cpu=u.ru_utime + u.ru_stime, maxrss_kb=u
 """
 
 
+def pythonpath(first: Path) -> str:
+    """$PYTHONPATH with ``first`` in front: a process that imports chainrun from it."""
+    rest = os.environ.get("PYTHONPATH")
+    return str(first) + (os.pathsep + rest if rest else "")
+
+
 def chainrun_command() -> list[str]:
     exe = Path(sys.executable).with_name("chainrun")
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "chainrun"]
@@ -366,7 +372,12 @@ class ProcessRun:
 
 
 class Processes:
-    """Runs ``chainrun simulate`` on generated configs in a scratch folder."""
+    """Runs ``chainrun simulate`` on generated configs in a scratch folder.
+
+    A process given no ``env`` imports chainrun from this checkout (``ROOT`` first on
+    its ``PYTHONPATH``): each runs in a folder of the scratch, where a relative entry
+    such as ``PYTHONPATH=.`` would name that folder and let the process import
+    whichever chainrun the interpreter has installed."""
 
     def __init__(self, scratch: Path):
         self.scratch = scratch
@@ -382,6 +393,8 @@ class Processes:
         out = folder / "out"
         cmd = [sys.executable, "-c", _WRAPPER, str(folder / "log.txt"), *chainrun_command(),
                "simulate", str(cfg), "-o", str(out)]
+        if env is None:
+            env = dict(os.environ, PYTHONPATH=pythonpath(ROOT))
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, cwd=folder,
                                 env=env, start_new_session=True)
         try:

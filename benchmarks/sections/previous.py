@@ -14,10 +14,10 @@ import os
 from dataclasses import dataclass, field
 
 from benchmarks.harness import (ROOT, Context, alternate, config_text, fmt_t, git_commit,
-                                log, median, ratio, ratio_text, table, times_text)
+                                log, median, pythonpath, ratio, ratio_text, table,
+                                times_text)
 from benchmarks.sections import Result
-from benchmarks.worktree import (checkout, pythonpath, resolve_against,
-                                 solver_changes_uncommitted)
+from benchmarks.worktree import checkout, resolve_against, solver_changes_uncommitted
 
 
 @dataclass

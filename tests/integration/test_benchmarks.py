@@ -7,6 +7,7 @@ honest, in a few seconds.
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -117,6 +118,29 @@ def test_generated_config_is_a_valid_experiment():
     (spec,) = exp.runs()
     assert (spec.n, spec.k, spec.alpha, spec.t_end) == (1000, 1, 1.5, 1270.0)
     assert spec.times.size == 200 and spec.times[-1] == 1270.0
+
+
+def test_processes_import_this_checkout(tmp_path, monkeypatch):
+    """A ``chainrun simulate`` process runs in a scratch folder: a relative
+    ``PYTHONPATH=.`` would name that folder there, so this checkout comes first."""
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def popen(cmd, **kwargs):
+        seen.update(kwargs)
+        raise Stop
+
+    monkeypatch.setenv("PYTHONPATH", ".")
+    monkeypatch.setattr(harness.subprocess, "Popen", popen)
+    procs = harness.Processes(tmp_path)
+    with pytest.raises(Stop):
+        procs.run("name = 'x'\n")
+    assert seen["env"]["PYTHONPATH"].split(os.pathsep) == [str(harness.ROOT), "."]
+    with pytest.raises(Stop):                       # an environment given is kept
+        procs.run("name = 'x'\n", env={"PYTHONPATH": "/old"})
+    assert seen["env"] == {"PYTHONPATH": "/old"}
 
 
 def _git(*args, cwd):
