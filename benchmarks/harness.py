@@ -43,6 +43,9 @@ RANDOM_LINE = {"mass": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 1
                "stiffness": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 2}}
 #: A steel line in SI units: beads of one inch, the first striking at 0.5 m/s.
 SI_LINE = {"speed": 0.5, "diameter": 0.0254, "material": "steel"}
+#: The damped line: the steel line with Tsuji damping for a restitution of 0.9 (the
+#: lammps section's damped line, and the targets').
+DAMPED_LINE = dict(SI_LINE, restitution=0.9, damping_law="tsuji")
 
 
 def log(msg: str) -> None:
@@ -359,6 +362,58 @@ def config_text(name: str, n: int, k: int, alpha: float | None, *,
     if solver:
         lines += ["[solver]"] + [f"{key} = {v!r}" for key, v in solver.items()]
     return "\n".join(lines) + "\n"
+
+
+#: What a report says of each kind of line a ``Case`` names.
+ABOUT = {"Hertz": "the paper's line, unit balls, the first K at velocity 1, alpha = 1.5",
+         "linear": "the paper's line with alpha = 1",
+         "random": "masses and stiffnesses uniform in [1, 10) (numpy seeds 1 and 2), Hertz, "
+                   "K = 1",
+         "damped": "steel beads of one inch in SI units, the first at 0.5 m/s, Tsuji "
+                   "damping for a restitution of 0.9, K = 1"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """A line timed as whole ``chainrun simulate`` processes to its terminal state.
+
+    ``label`` names its kind (``Hertz``, ``linear``: the paper's line; ``random``:
+    ``RANDOM_LINE``; ``damped``: ``DAMPED_LINE``), with ``n`` balls, ``k`` strikers,
+    ``alpha`` (None: the material's law), the keys ``chain`` adds to ``[chain]`` and
+    ``top`` at the top level (``config_text``). As a target: ``limit``, its seconds,
+    or ``no_slower``, read as new/old against the previous version (section
+    ``previous``)."""
+
+    label: str
+    n: int
+    k: int = 1
+    alpha: float | None = 1.5
+    chain: dict | None = None
+    top: dict | None = None
+    limit: float | None = None
+    no_slower: bool = False
+
+    @classmethod
+    def random(cls, n: int, **kwargs) -> "Case":
+        """The random line (``RANDOM_LINE``, Hertz) of ``n`` balls."""
+        return cls("random", n, chain=dict(RANDOM_LINE), **kwargs)
+
+    @classmethod
+    def damped(cls, n: int, **kwargs) -> "Case":
+        """The damped steel line (``DAMPED_LINE``, SI units) of ``n`` balls."""
+        return cls("damped", n, alpha=None, chain=dict(DAMPED_LINE), top={"units": "si"},
+                   **kwargs)
+
+    @property
+    def name(self) -> str:
+        """As the report names it: ``Hertz N = 2000, K = 80``."""
+        return f"{self.label} N = {self.n}" + (f", K = {self.k}" if self.k != 1 else "")
+
+    def config(self, prefix: str) -> str:
+        """Its experiment file, named ``prefix-label-n[-kK]``."""
+        name = f"{prefix}-{self.label.lower()}-{self.n}" + (f"-k{self.k}" if self.k != 1
+                                                             else "")
+        return config_text(name, self.n, self.k, self.alpha, chain=self.chain, top=self.top)
 
 
 @dataclass
