@@ -138,8 +138,8 @@ def readme_block(data: dict) -> str:
         used.append("targets")
         timed = [t for t in targets.targets if t.walls]
         parts = [f"a {t.label} line of {_balls(t.n)}"
-                 + (f" struck by {t.k} (K = {t.k})" if t.k != 1 else "")
-                 + f" {_span(t.walls)} s (limit {t.limit:g} s)" for t in timed]
+                 + (f" (K = {t.k})" if t.k != 1 else "")
+                 + f" in {_span(t.walls)} s (limit {t.limit:g} s)" for t in timed]
         if parts:
             counts = sorted({len(t.walls) for t in timed})
             runs = (f"{counts[0]} runs each" if len(counts) == 1 else
