@@ -34,14 +34,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from benchmarks.harness import (REFERENCE_RTOL, SI_LINE, Context, Processes, config_text,
-                                fmt_e, fmt_t, log, solve, table)
+from benchmarks.harness import (DAMPED_LINE, REFERENCE_RTOL, SI_LINE, Context, Processes,
+                                config_text, fmt_e, fmt_t, log, solve, table)
 from benchmarks.peers import lammps_peer as lp
 from benchmarks.sections import Result
 
 #: The lines: chainrun's keys of ``[chain]`` beside n and k.
 LINES = {"elastic": dict(SI_LINE),
-         "damped": dict(SI_LINE, restitution=0.9, damping_law="tsuji")}
+         "damped": dict(DAMPED_LINE)}
 #: LAMMPS's time steps, as fractions of the two-ball contact time: dt = t_c / f.
 STEP_FRACTIONS = (20, 50, 100, 200, 400, 1000)
 #: chainrun's tolerances (its reference's is the bench's ``REFERENCE_RTOL``).

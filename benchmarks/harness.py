@@ -43,6 +43,9 @@ RANDOM_LINE = {"mass": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 1
                "stiffness": {"random": "uniform", "low": 1.0, "high": 10.0, "seed": 2}}
 #: A steel line in SI units: beads of one inch, the first striking at 0.5 m/s.
 SI_LINE = {"speed": 0.5, "diameter": 0.0254, "material": "steel"}
+#: The damped line: the steel line with Tsuji damping for a restitution of 0.9 (the
+#: lammps section's damped line, and the targets').
+DAMPED_LINE = dict(SI_LINE, restitution=0.9, damping_law="tsuji")
 
 
 def log(msg: str) -> None:
@@ -316,6 +319,12 @@ print(json.dumps(dict(rc=rc, wall=wall, cpu=u.ru_utime + u.ru_stime, maxrss_kb=u
 """
 
 
+def pythonpath(first: Path) -> str:
+    """$PYTHONPATH with ``first`` in front: a process that imports chainrun from it."""
+    rest = os.environ.get("PYTHONPATH")
+    return str(first) + (os.pathsep + rest if rest else "")
+
+
 def chainrun_command() -> list[str]:
     exe = Path(sys.executable).with_name("chainrun")
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "chainrun"]
@@ -355,6 +364,58 @@ def config_text(name: str, n: int, k: int, alpha: float | None, *,
     return "\n".join(lines) + "\n"
 
 
+#: What a report says of each kind of line a ``Case`` names.
+ABOUT = {"Hertz": "the paper's line, unit balls, the first K at velocity 1, alpha = 1.5",
+         "linear": "the paper's line with alpha = 1",
+         "random": "masses and stiffnesses uniform in [1, 10) (numpy seeds 1 and 2), Hertz, "
+                   "K = 1",
+         "damped": "steel beads of one inch in SI units, the first at 0.5 m/s, Tsuji "
+                   "damping for a restitution of 0.9, K = 1"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """A line timed as whole ``chainrun simulate`` processes to its terminal state.
+
+    ``label`` names its kind (``Hertz``, ``linear``: the paper's line; ``random``:
+    ``RANDOM_LINE``; ``damped``: ``DAMPED_LINE``), with ``n`` balls, ``k`` strikers,
+    ``alpha`` (None: the material's law), the keys ``chain`` adds to ``[chain]`` and
+    ``top`` at the top level (``config_text``). As a target: ``limit``, its seconds,
+    or ``no_slower``, read as new/old against the previous version (section
+    ``previous``)."""
+
+    label: str
+    n: int
+    k: int = 1
+    alpha: float | None = 1.5
+    chain: dict | None = None
+    top: dict | None = None
+    limit: float | None = None
+    no_slower: bool = False
+
+    @classmethod
+    def random(cls, n: int, **kwargs) -> "Case":
+        """The random line (``RANDOM_LINE``, Hertz) of ``n`` balls."""
+        return cls("random", n, chain=dict(RANDOM_LINE), **kwargs)
+
+    @classmethod
+    def damped(cls, n: int, **kwargs) -> "Case":
+        """The damped steel line (``DAMPED_LINE``, SI units) of ``n`` balls."""
+        return cls("damped", n, alpha=None, chain=dict(DAMPED_LINE), top={"units": "si"},
+                   **kwargs)
+
+    @property
+    def name(self) -> str:
+        """As the report names it: ``Hertz N = 2000, K = 80``."""
+        return f"{self.label} N = {self.n}" + (f", K = {self.k}" if self.k != 1 else "")
+
+    def config(self, prefix: str) -> str:
+        """Its experiment file, named ``prefix-label-n[-kK]``."""
+        name = f"{prefix}-{self.label.lower()}-{self.n}" + (f"-k{self.k}" if self.k != 1
+                                                             else "")
+        return config_text(name, self.n, self.k, self.alpha, chain=self.chain, top=self.top)
+
+
 @dataclass
 class ProcessRun:
     wall: float | None
@@ -366,7 +427,12 @@ class ProcessRun:
 
 
 class Processes:
-    """Runs ``chainrun simulate`` on generated configs in a scratch folder."""
+    """Runs ``chainrun simulate`` on generated configs in a scratch folder.
+
+    A process given no ``env`` imports chainrun from this checkout (``ROOT`` first on
+    its ``PYTHONPATH``): each runs in a folder of the scratch, where a relative entry
+    such as ``PYTHONPATH=.`` would name that folder and let the process import
+    whichever chainrun the interpreter has installed."""
 
     def __init__(self, scratch: Path):
         self.scratch = scratch
@@ -382,6 +448,8 @@ class Processes:
         out = folder / "out"
         cmd = [sys.executable, "-c", _WRAPPER, str(folder / "log.txt"), *chainrun_command(),
                "simulate", str(cfg), "-o", str(out)]
+        if env is None:
+            env = dict(os.environ, PYTHONPATH=pythonpath(ROOT))
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, cwd=folder,
                                 env=env, start_new_session=True)
         try:

@@ -136,12 +136,18 @@ def readme_block(data: dict) -> str:
     targets = result_of(data, "targets")
     if targets:
         used.append("targets")
-        parts = [f"a {t.label} line of {_balls(t.n)} {_span(t.walls)} s"
-                 for t in targets.targets if t.walls]
+        timed = [t for t in targets.targets if t.walls]
+        parts = [f"a {t.label} line of {_balls(t.n)}"
+                 + (f" (K = {t.k})" if t.k != 1 else "")
+                 + f" in {_span(t.walls)} s (limit {t.limit:g} s)" for t in timed]
         if parts:
-            runs = len(targets.targets[0].walls)
-            sentences.append(f"To the terminal state as a whole process ({runs} runs each): "
-                             f"{', and '.join(parts)}.")
+            counts = sorted({len(t.walls) for t in timed})
+            runs = (f"{counts[0]} runs each" if len(counts) == 1 else
+                    f"{'-'.join(str(c) for c in (counts[0], counts[-1]))} runs each: a run "
+                    "far over its limit is not repeated")
+            sentences.append(f"To the terminal state as a whole process ({runs}): "
+                             f"{', '.join(parts[:-1])}{', and ' if len(parts) > 1 else ''}"
+                             f"{parts[-1]}.")
     comp = result_of(data, "compile")
     if comp and comp.compile_wall is not None:
         used.append("compile")

@@ -16,9 +16,12 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
    agreement check.
 3. scaling: Hertz N = 250 ... 10^6 and linear N = 100 ... 10^5, to the terminal
    state; the fitted exponent of time versus N for each tool.
-4. targets: the timed targets as whole ``chainrun simulate`` processes, each run
-   three times: Hertz N = 10^6 and linear N = 10^5, K = 1, to the terminal state,
-   against their limits (10 s and 30 s).
+4. targets: the timed targets (issue 34's) as whole ``chainrun simulate`` processes,
+   to the terminal state, each run three times, with each run's events and wall time
+   per event: Hertz N = 2000, K = 80 (a cascade; limit 10 s), the random line N = 1000
+   (3 s), the damped steel line N = 3000 (5 s), Hertz N = 10^6 (5 s) and linear
+   N = 10^5 (3 s), K = 1; Hertz N = 10^4 no slower than the previous version is read
+   in section previous.
 5. k80: N = 2000, K = 80, Hertz, to the terminal state.
 6. memory: peak resident memory of ``chainrun simulate``, N = 10^6, 200 snapshots
    (and 2, to show it does not depend on their number).
@@ -28,7 +31,9 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
    over its cap is skipped. The steel line in SI units against the paper's, N = 10^5.
 8. previous: this version against a previous one (``--against REV``; by default the
    solver before its latest change), checked out into a temporary git worktree, on
-   Hertz N = 10^4 and 10^6 and linear N = 10^5, the two versions' runs alternating.
+   Hertz N = 10^4 and 10^6, linear N = 10^5, the random line N = 1000 and the damped
+   line N = 3000, the two versions' runs alternating; Hertz N = 10^4 is a target (no
+   slower).
 9. lammps: chainrun against LAMMPS (optional) on lines of steel spheres, elastic and
    damped: two-ball checks and restitutions, accuracy against the time step and rtol
    (N = 20), and whole-process times at N = 2000, 10^4 (elastic) and 3000 (damped)
@@ -36,7 +41,7 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 
 Examples::
 
-    python -m benchmarks.run                 # default, 13-18 minutes
+    python -m benchmarks.run                 # default, 35-40 minutes
     python -m benchmarks.run --full          # everything, the largest cases too
     python -m benchmarks.run --only peers scaling
     python -m benchmarks.run --only previous --against main~3
@@ -59,7 +64,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks import results
-from benchmarks.harness import (ACCURACY, ROOT, SHORT, Context, Processes, config_text,
+from benchmarks.harness import (ACCURACY, ROOT, SHORT, Case, Context, Processes, config_text,
                                 git_commit, jsonable, log, machine_info, solve_paper,
                                 versions)
 from benchmarks.sections import SECTIONS, module
@@ -84,9 +89,17 @@ class Mode:
     k80_process: bool = False         # also time it as a whole process (as long again)
     memory_t_end: float | None = 1000.0
     memory_n: int = 1_000_000
-    # (label, N, alpha, limit in seconds): whole processes to the terminal state
-    targets: tuple = (("Hertz", 1_000_000, 1.5, 10.0), ("linear", 100_000, 1.0, 30.0))
+    # targets (issue 34's): whole processes to the terminal state, each within its limit
+    # (seconds); a run over target_over x its limit is not repeated; each run is stopped
+    # after the larger of target_timeout and 10 x its limit
+    targets: tuple = (Case("Hertz", 2000, k=80, limit=10.0),
+                      Case.random(1000, limit=3.0),
+                      Case.damped(3000, limit=5.0),
+                      Case("Hertz", 1_000_000, limit=5.0),
+                      Case("linear", 100_000, alpha=1.0, limit=3.0))
     target_runs: int = 3
+    target_over: float = 3.0
+    target_timeout: float = 900.0
     # general: the paper's Hertz line against RANDOM_LINE, to the terminal state; a
     # random-line size predicted over general_cap seconds is skipped (the requirement is
     # read at the largest N)
@@ -94,10 +107,14 @@ class Mode:
     general_cap: float = 60.0
     general_runs: int = 3
     units_n: int = 100_000            # the SI steel line against the paper's
-    # previous: (label, N, alpha) to the terminal state, both versions alternating
-    previous_cases: tuple = (("Hertz", 10_000, 1.5), ("Hertz", 1_000_000, 1.5),
-                             ("linear", 100_000, 1.0))
+    # previous: lines to the terminal state, both versions alternating; no_slower marks
+    # a target read as new/old, met where the ratio of the medians is at most
+    # 1 + previous_slack (the drift alternating leaves)
+    previous_cases: tuple = (Case("Hertz", 10_000, no_slower=True),
+                             Case("Hertz", 1_000_000), Case("linear", 100_000, alpha=1.0),
+                             Case.random(1000), Case.damped(3000))
     previous_runs: int = 5
+    previous_slack: float = 0.05
     # lammps (benchmarks.against_lammps): the accuracy line's N, LAMMPS's steps t_c / f,
     # the N of the mid-wave error's growth, the timed lines (kind, N, target ratio); a
     # LAMMPS run predicted over lammps_cap seconds is timed on fractions of its steps
@@ -118,11 +135,16 @@ class Mode:
                        linear_n=(50, 100, 200), hertz_budget=10.0, linear_budget=10.0,
                        linear_peer_n=(30, 60), peer_point_cap=10.0, k80_timeout=5.0,
                        memory_t_end=20.0, memory_n=10_000,
-                       targets=(("Hertz", 2000, 1.5, 10.0), ("linear", 500, 1.0, 30.0)),
-                       target_runs=2, general_n=(30, 100, 300), general_cap=10.0,
+                       targets=(Case("Hertz", 200, k=8, limit=10.0),
+                                Case.random(100, limit=3.0), Case.damped(100, limit=5.0),
+                                Case("Hertz", 2000, limit=5.0),
+                                Case("linear", 500, alpha=1.0, limit=3.0)),
+                       target_runs=2, target_timeout=120.0,
+                       general_n=(30, 100, 300), general_cap=10.0,
                        general_runs=2, units_n=1000,
-                       previous_cases=(("Hertz", 200, 1.5), ("Hertz", 2000, 1.5),
-                                       ("linear", 500, 1.0)),
+                       previous_cases=(Case("Hertz", 200, no_slower=True),
+                                       Case("Hertz", 2000), Case("linear", 500, alpha=1.0),
+                                       Case.random(100), Case.damped(100)),
                        previous_runs=2, lammps_fractions=(20, 100, 400),
                        lammps_growth_n=(20, 60), lammps_cost=(("elastic", 200, None),
                                                               ("damped", 60, 20.0)),

@@ -88,9 +88,3 @@ def checkout(commit: str, tree: Path, root: Path = ROOT):
             except RuntimeError as exc:
                 log(f"  could not remove the worktree {tree}: {exc}; "
                     f"`git worktree prune` forgets it once the folder is gone")
-
-
-def pythonpath(first: Path) -> str:
-    """$PYTHONPATH with ``first`` in front: a process that imports chainrun from it."""
-    rest = os.environ.get("PYTHONPATH")
-    return str(first) + (os.pathsep + rest if rest else "")

@@ -3,9 +3,11 @@ run.
 
 The previous revision (``worktree.resolve_against``) is checked out into a temporary
 worktree with a numba cache of its own (its first run compiles, and is left out), and
-the two versions' ``chainrun simulate`` processes alternate on the targets' paper
-lines (this host's speed drifts by several per cent over minutes; alternating spreads
-the drift over both).
+the two versions' ``chainrun simulate`` processes alternate on the lines of
+``Mode.previous_cases`` (this host's speed drifts by several per cent over minutes;
+alternating spreads the drift over both): the targets' lines, among them the one whose
+target is to be no slower than the previous version (Hertz N = 10^4), met where the
+ratio new/old of the medians is at most ``1 + Mode.previous_slack``.
 """
 
 from __future__ import annotations
@@ -13,11 +15,11 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
-from benchmarks.harness import (ROOT, Context, alternate, config_text, fmt_t, git_commit,
-                                log, median, ratio, ratio_text, table, times_text)
+from benchmarks.harness import (ABOUT, ROOT, Context, alternate, config_text, fmt_t,
+                                git_commit, log, median, pythonpath, ratio, ratio_text,
+                                table, times_text)
 from benchmarks.sections import Result
-from benchmarks.worktree import (checkout, pythonpath, resolve_against,
-                                 solver_changes_uncommitted)
+from benchmarks.worktree import checkout, resolve_against, solver_changes_uncommitted
 
 
 @dataclass
@@ -34,6 +36,20 @@ class PreviousResult(Result):
     new: dict | None = None
     old_first_run: dict | None = None
     error: str | None = None
+    slack: float = 0.05               # a no-slower target's allowance over 1
+
+    @staticmethod
+    def case_name(c: dict) -> str:
+        return f"{c['label']} {c['n']}" + (f" K = {c['k']}" if c.get("k", 1) != 1 else "")
+
+    def verdict(self, c: dict) -> str | None:
+        """A no-slower target's verdict on the case ``c``; None for another case."""
+        if not c.get("no_slower"):
+            return None
+        r = c.get("ratio_median")
+        if r is None:
+            return "NOT MEASURED"
+        return ("MET" if r <= 1 + self.slack else "NOT MET") + f" (new/old median {r:.2f})"
 
     def lines(self) -> list[str]:
         if self.commit is None:
@@ -57,7 +73,7 @@ class PreviousResult(Result):
             rows = []
             for c in self.cases:
                 new_w, old_w = c["new"]["walls"], c["old"]["walls"]
-                rows.append([f"{c['label']} {c['n']}",
+                rows.append([self.case_name(c),
                              fmt_t(min(new_w)) if new_w else "-",
                              fmt_t(median(new_w)) if new_w else "-",
                              fmt_t(min(old_w)) if old_w else "-",
@@ -71,6 +87,15 @@ class PreviousResult(Result):
                         f"old {times_text(c['old']['walls'])} s")
                 errors = c["new"]["errors"] + c["old"]["errors"]
                 out.append(line + (f"  [{errors[0]}]" if errors else ""))
+            for c in self.cases:
+                verdict = self.verdict(c)
+                if verdict is not None:
+                    out.append(f"  Target {c['label']} N = {c['n']} no slower than the "
+                               f"previous version (new/old median at most "
+                               f"{1 + self.slack:g}): {verdict}")
+            about = [f"{c['label']}: {c['about']}" for c in self.cases if c.get("about")]
+            if about:
+                out.append("  Lines: " + "; ".join(about) + ".")
         return out
 
 
@@ -80,7 +105,7 @@ RESULT = PreviousResult
 def run(ctx: Context) -> PreviousResult:
     """This version against the previous one on ``mode.previous_cases``."""
     mode, procs = ctx.mode, ctx.procs
-    out = PreviousResult(runs=mode.previous_runs)
+    out = PreviousResult(runs=mode.previous_runs, slack=mode.previous_slack)
     try:
         chosen = resolve_against(ctx.against)
     except ValueError as exc:
@@ -120,12 +145,15 @@ def _compare(out: PreviousResult, mode, procs, envs: dict) -> None:
     log(f"  first run {fmt_t(cold.wall)} s (cpu {fmt_t(cold.cpu)} s), then "
         f"{fmt_t(again.wall)} s")
     procs.run(warm, env=envs["new"], read_velocity=False)   # this version's cache
-    for label, n, alpha in mode.previous_cases:
-        log(f"previous: {label} N = {n}, K = 1, to the terminal state, "
+    for spec in mode.previous_cases:
+        log(f"previous: {spec.name}, to the terminal state, "
             f"{mode.previous_runs} runs of each version, alternating")
-        text = config_text(f"previous-{label.lower()}-{n}", n, 1, alpha)
+        text = spec.config("previous")
         jobs = {v: {"text": text, "env": envs[v], "timeout": 900.0} for v in ("new", "old")}
-        case = {"label": label, "n": n, "alpha": alpha}
+        case = {"label": spec.label, "n": spec.n, "k": spec.k, "alpha": spec.alpha,
+                "chain": spec.chain, "top": spec.top, "no_slower": spec.no_slower}
+        if spec.label in ABOUT and spec.label not in ("Hertz", "linear"):
+            case["about"] = ABOUT[spec.label]
         case.update(alternate(procs, jobs, mode.previous_runs))
         for v in ("new", "old"):
             case[v].pop("diagnostics")

@@ -7,6 +7,7 @@ honest, in a few seconds.
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -17,7 +18,7 @@ import pytest
 
 from benchmarks import harness, run, worktree
 from benchmarks.peers import rk4_paper, scipy_dop853
-from benchmarks.sections import general, peers, previous
+from benchmarks.sections import general, peers, previous, targets
 from chainrun.config import parse_experiment
 
 
@@ -117,6 +118,29 @@ def test_generated_config_is_a_valid_experiment():
     (spec,) = exp.runs()
     assert (spec.n, spec.k, spec.alpha, spec.t_end) == (1000, 1, 1.5, 1270.0)
     assert spec.times.size == 200 and spec.times[-1] == 1270.0
+
+
+def test_processes_import_this_checkout(tmp_path, monkeypatch):
+    """A ``chainrun simulate`` process runs in a scratch folder: a relative
+    ``PYTHONPATH=.`` would name that folder there, so this checkout comes first."""
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def popen(cmd, **kwargs):
+        seen.update(kwargs)
+        raise Stop
+
+    monkeypatch.setenv("PYTHONPATH", ".")
+    monkeypatch.setattr(harness.subprocess, "Popen", popen)
+    procs = harness.Processes(tmp_path)
+    with pytest.raises(Stop):
+        procs.run("name = 'x'\n")
+    assert seen["env"]["PYTHONPATH"].split(os.pathsep) == [str(harness.ROOT), "."]
+    with pytest.raises(Stop):                       # an environment given is kept
+        procs.run("name = 'x'\n", env={"PYTHONPATH": "/old"})
+    assert seen["env"] == {"PYTHONPATH": "/old"}
 
 
 def _git(*args, cwd):
@@ -271,6 +295,126 @@ def test_report_shows_the_general_and_previous_sections():
         "Previous version: cannot resolve"]
 
 
+# --- the targets: issue 34's lines, their runs' events, the no-slower target --------------
+
+
+def test_targets_are_the_lines_of_issue_34():
+    """The default targets: the K = 80 cascade, the random line, the damped steel line
+    (the lammps section's), Hertz 10^6 and linear 10^5, each with its limit; Hertz 10^4
+    no slower than the previous version, which runs the random and damped lines too."""
+    mode = run.Mode.make(full=False)
+    assert [(c.name, c.limit) for c in mode.targets] == [
+        ("Hertz N = 2000, K = 80", 10.0), ("random N = 1000", 3.0), ("damped N = 3000", 5.0),
+        ("Hertz N = 1000000", 5.0), ("linear N = 100000", 3.0)]
+    k80, rand, damped = (parse_experiment(c.config("t"), "toml").runs()[0]
+                         for c in mode.targets[:3])
+    assert (k80.n, k80.k, k80.alpha, k80.t_end) == (2000, 80, 1.5, None)
+    assert rand.line.mass.min() >= 1.0 and rand.line.mass.max() < 10.0 and rand.k == 1
+    (same,) = parse_experiment(harness.config_text("g", 1000, 1, 1.5,
+                                                   chain=harness.RANDOM_LINE), "toml").runs()
+    assert np.array_equal(rand.line.mass, same.line.mass)
+    assert np.array_equal(rand.line.stiffness, same.line.stiffness)
+    assert damped.units == "si" and damped.n == 3000 and damped.t_end is None
+    assert np.all(damped.line.damping > 0) and np.allclose(damped.line.damping_exponent, 0.25)
+    from benchmarks import against_lammps
+    assert harness.DAMPED_LINE == against_lammps.LINES["damped"]
+    assert [(c.name, c.no_slower) for c in mode.previous_cases] == [
+        ("Hertz N = 10000", True), ("Hertz N = 1000000", False),
+        ("linear N = 100000", False), ("random N = 1000", False), ("damped N = 3000", False)]
+    smoke = run.Mode.make(full=False, smoke=True)             # small sizes, the same lines
+    assert [c.label for c in smoke.targets] == [c.label for c in mode.targets]
+    assert max(c.n for c in smoke.targets) <= 2000
+
+
+class _ScriptedProcs:
+    """Stands for ``Processes``: each config's runs take the walls given, in order, and
+    end as the diagnostics say."""
+
+    def __init__(self, walls: dict, outcome="terminal"):
+        self.walls, self.outcome, self.texts = walls, outcome, []
+
+    def run(self, text, *, env=None, timeout=None, read_velocity=True,
+            read_diagnostics=False):
+        self.texts.append(text)
+        key = next(k for k in self.walls if f"-{k}" in text.splitlines()[0])
+        wall = self.walls[key].pop(0)
+        d = {"events": 1000, "steps": 3000, "rejected_steps": 700, "max_window": 50,
+             "closed_form_collisions": 0, "outcome": self.outcome, "end_time": 9.0}
+        return harness.ProcessRun(wall, wall, 100.0,
+                                  diagnostics=d if read_diagnostics else None)
+
+
+def test_targets_section_reports_each_run_its_events_and_verdict():
+    mode = run.Mode(full=False, target_runs=3, target_over=3.0,
+                    targets=(harness.Case("Hertz", 2000, k=80, limit=10.0),
+                             harness.Case.random(1000, limit=3.0)))
+    procs = _ScriptedProcs({"hertz-2000-k80": [31.0, 1.0, 1.0], "random-1000": [2.0, 2.5, 3.5]})
+    ctx = harness.Context(mode, procs)
+    got = targets.run(ctx)
+    k80, rand = got.targets
+    # the cascade's first run is over 3x its limit: not repeated, not met
+    assert k80.walls == [31.0] and not k80.met and k80.stopped
+    assert (rand.walls, rand.runs_within_limit, rand.met) == ([2.0, 2.5, 3.5], 2, False)
+    assert rand.events == [1000] * 3 and rand.per_event_us() == [2000.0, 2500.0, 3500.0]
+    text = "\n".join(got.lines())
+    assert ("Hertz N = 2000, K = 80: 31.0 s (limit 10 s): NOT MET, met in 0 of 1 runs "
+            "(not repeated: over 3 x the limit); 1,000 events, 31,000 us per event" in text)
+    assert "random N = 1000: 2.00, 2.50, 3.50 s (limit 3 s): NOT MET, met in 2 of 3" in text
+    assert "3,000 steps (700 rejected), window up to 50 balls" in text
+    assert "Hertz N = 10000: no slower than the previous version" in text
+    assert "random: masses and stiffnesses uniform in [1, 10)" in text
+    assert targets.TargetsResult.from_json(got.to_json()).lines() == got.lines()
+    # a run that ends short of the terminal state is not a time of the target
+    procs = _ScriptedProcs({"hertz-2000-k80": [1.0], "random-1000": [1.0]}, outcome="stop_time")
+    got = targets.run(harness.Context(mode, procs))
+    assert all(not t.met and not t.walls and "not in the terminal state" in t.errors[0]
+               for t in got.targets)
+
+
+def test_previous_section_runs_the_cases_and_reads_the_no_slower_target():
+    mode = run.Mode.make(full=False, smoke=True)
+    mode.previous_runs = 2
+    names = ["warmup"] + [c.config("previous").splitlines()[0] for c in mode.previous_cases]
+
+    class Procs:
+        texts = []
+
+        def run(self, text, *, env=None, timeout=None, read_velocity=True,
+                read_diagnostics=False):
+            self.texts.append(text)
+            # the old version 10% slower on Hertz 200, 10% faster on the others
+            fast = "hertz-200\"" in text.splitlines()[0]
+            wall = {"new": 1.0, "old": 1.1 if fast else 0.9}[env["who"]]
+            return harness.ProcessRun(wall, wall, 100.0)
+
+    procs = Procs()
+    out = previous.PreviousResult(runs=2, slack=mode.previous_slack, commit="a" * 40,
+                                  why="HEAD", subject="s")
+    previous._compare(out, mode, procs, {"new": {"who": "new"}, "old": {"who": "old"}})
+    assert [c["label"] for c in out.cases] == ["Hertz", "Hertz", "linear", "random", "damped"]
+    firsts = [t.splitlines()[0] for t in procs.texts]
+    for name in names[1:]:
+        assert firsts.count(name) == 4                      # 2 runs x 2 versions
+    assert out.cases[0]["no_slower"] and out.cases[0]["ratio_median"] == pytest.approx(1 / 1.1)
+    text = "\n".join(out.lines())
+    assert ("Target Hertz N = 200 no slower than the previous version (new/old median at "
+            "most 1.05): MET (new/old median 0.91)") in text
+    assert re.search(r"damped 100\s+1\.00\s+1\.00\s+0\.90\s+0\.90\s+1\.11", text)
+    assert "damped: steel beads of one inch in SI units" in text
+    slower = dict(out.cases[0], ratio_median=1.2)
+    assert out.verdict(slower) == "NOT MET (new/old median 1.20)"
+    assert out.verdict(out.cases[1]) is None
+
+
+def test_a_process_run_reads_its_events_from_the_run_file(tmp_path):
+    """The targets' events come from the run file's diagnostics (a real process)."""
+    r = harness.Processes(tmp_path).run(harness.Case.damped(20).config("t"),
+                                        read_velocity=False, read_diagnostics=True)
+    assert r.error is None and r.wall > 0
+    assert r.diagnostics["outcome"] == "terminal" and r.diagnostics["events"] > 0
+    assert r.diagnostics["steps"] >= r.diagnostics["rejected_steps"] >= 0
+
+
 @pytest.fixture
 def solver_history(tmp_path):
     """A repository whose solver changed in commits 1 and 2, and docs alone in 3."""
@@ -378,7 +522,7 @@ def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
     assert md == results.render(load)
     assert "load average 1.5 at the start, 2.5 at the end" in md and "Note: a note" in md
     block = " ".join(results.readme_block(load).split())
-    assert "a linear line of 10^5 balls 3.00 s" in block
+    assert "a linear line of 10^5 balls in 3.00 s (limit 30 s)" in block
     assert "compiles the solver in 79 s" in block and "0.50-0.60 s" in block
     assert "load average 1.5 to 2.5" in block
 
