@@ -106,8 +106,6 @@ def _us(x: float) -> str:
     return f"{x:,.0f}" if x >= 10 else f"{x:.1f}"
 
 
-
-
 def _span(xs, fmt) -> str:
     fmt = fmt.format if isinstance(fmt, str) else fmt
     lo, hi = fmt(min(xs)), fmt(max(xs))
