@@ -283,14 +283,12 @@ def test_a_pair_pressed_together_stays_in_contact_when_rounding_parts_it():
         sol.positions[-1] - line.position)))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "solver defect: the scales of a line at rest come from its force alone; a force of "
-    "4e-154 gives a length scale of 4e-62, and the ball's place in those units, 1e62, "
-    "overflows the contact's energy: 'state became non-finite at t = 0'"))
 def test_a_line_at_rest_under_a_force_below_its_rounding():
-    # Found by the fuzzer, which runs a line for 30 of its time scales (3e47 here).
-    # Over that time the force moves ball 2 by about 1e-60, pressed on the wall: the
-    # run ends with the balls where they started, to far below 1e-15.
+    # Found by the fuzzer, which runs a line for 30 of its time scales. The scales came
+    # from the force and the contact of exponent 2.5 (a length of 4e-62), in which the
+    # linear wall had a stiffness of 1e92 and the run ended at t = 0, non-finite. The
+    # force presses ball 2 on the wall by f/k_R = 4e-154: the run ends with the balls
+    # where they started, to far below 1e-15.
     line = Line.make(2, stiffness=1.0919, alpha=2.5, velocity=np.zeros(2),
                      force=[0.0, 4.18e-154], right=Wall(1.0, 1.0))
     t_end = 30.0 * line.scales().time
