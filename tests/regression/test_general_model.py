@@ -297,6 +297,27 @@ def test_a_line_at_rest_under_a_force_below_its_rounding():
     np.testing.assert_allclose(sol.positions[-1], line.position, rtol=0, atol=1e-15)
 
 
+def test_a_ball_pressed_on_a_linear_wall_by_a_force_below_its_rounding():
+    # The mirror of the line above, on a left wall, with its own mass and stiffness.
+    # Ball 1, touching the wall at rest, is pushed into it by f; ball 2, untouched, stays
+    # at rest. Ball 1 is then a linear oscillator about its static compression f/k_L:
+    # x_1 = -(f/k_L) (1 - cos(w t)), w = sqrt(k_L/m_1), as long as it stays in contact
+    # (it does: the compression never falls below 0). The motion, 1e-154 in size, is
+    # resolved to the closed form's tolerance relative to its amplitude.
+    f, m1, k_wall = 4.18e-154, 2.0, 0.7
+    line = Line.make(2, mass=[m1, 1.0], stiffness=1.0919, alpha=2.5, velocity=np.zeros(2),
+                     force=[-f, 0.0], left=Wall(k_wall, 1.0))
+    times = np.linspace(0.0, 30.0, 61)
+    sol = run(line, times, t_end=30.0)
+    assert_ok(sol, terminal=False)
+    w, amplitude = math.sqrt(k_wall / m1), f / k_wall
+    np.testing.assert_allclose(sol.positions[:, 0] / amplitude, -(1.0 - np.cos(w * times)),
+                               rtol=0, atol=TOL["closed_form"])
+    np.testing.assert_allclose(sol.velocities[:, 0] / (amplitude * w), -np.sin(w * times),
+                               rtol=0, atol=TOL["closed_form"])
+    assert np.all(sol.positions[:, 1] == 0.0) and np.all(sol.velocities[:, 1] == 0.0)
+
+
 def test_a_contact_grazing_under_forces_keeps_the_energy():
     # Forces press strikers into a line at rest; contact 7 (balls 7-8), pressed at
     # first, eases to a compression of about 1e-6 near t = 6.5 and is pressed again.
