@@ -35,6 +35,10 @@ import numpy as np
 from chainrun.solver.drive import Drive
 
 
+#: log(eps) of a float: a length below ``eps L`` is below the rounding of L
+_LOG_EPS = math.log(np.finfo(float).eps)
+
+
 def _alike(a: np.ndarray) -> bool:
     """Whether every entry of ``a`` is the same (or there is none)."""
     return a.size == 0 or bool(a[0] == a[-1] and np.all(a == a[0]))
@@ -343,6 +347,18 @@ class Line:
         static compression. Then the time ``T = (M V^(1-a) / K)^(1/(a+1))``
         and length ``V T`` make the force law ``K x^a`` balance ``M x''``: the paper's
         scales (its section 2), which are all 1 for its own line.
+
+        For a line at rest, the static compression is the median contact's,
+        ``L = (F/K)^(1/a)``. Where the exponents differ, another contact j can take a
+        compression ``L_j = (F/K_j)^(1/a_j)`` that is a vanishing fraction of it: far
+        from the crossing of two force laws, the ratio goes as a power of F (a linear
+        wall and a contact of exponent 2.5 under F = 4e-154: L_j / L = 1e-92). In
+        units of L that contact has a stiffness (L / L_j)^(a_j) and a time scale
+        sqrt(L_j / L) of the unit: it would never be resolved, and its stiffness
+        overflows the kernels' arithmetic. So where the smallest L_j is below the
+        rounding of L (``L_j < eps L``), that contact sets the scales (K_j, a_j,
+        L_j): the one the force actually moves, and every contact then has a
+        stiffness of at most 1. Elsewhere, the median contact's scales stand.
         """
         kappa, alpha, gap = self.contact_params() if params is None else params
         m = self.mass
@@ -373,6 +389,15 @@ class Line:
             # in logarithms: a force as small as a float can be (a subnormal) still
             # gives a positive length and speed, where (F/K)^(1/a) would underflow to 0
             log_length = (math.log(f) - math.log(k0)) / a0
+            if not (_alike(kappa) and _alike(alpha)):
+                # each contact's own static compression under F, in logarithms: where
+                # one is below the rounding of the length above, that contact is the
+                # one F moves, and it is the length (``scales``' docstring)
+                own = (math.log(f) - np.log(kappa)) / alpha
+                j = int(np.argmin(own))
+                if own[j] < log_length + _LOG_EPS:
+                    k0, a0 = float(kappa[j]), float(alpha[j])
+                    log_length = (math.log(f) - math.log(k0)) / a0
             log_speed = 0.5 * (log_length + math.log(f) - math.log(mass))
             log_time = (math.log(mass) + (1.0 - a0) * log_speed - math.log(k0)) / (a0 + 1.0)
             return Scales(mass, math.exp(log_speed + log_time), math.exp(log_time))

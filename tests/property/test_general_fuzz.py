@@ -102,8 +102,9 @@ def _forces(scale: float):
     """0, or a force of either sign from 1e-6 of ``scale`` to ``scale``. A smaller one
     (a subnormal, say) moves a line by less than its rounding over the times drawn
     here, and sets its scales alone on a line at rest; such forces have tests of their
-    own in test_general_model.py (``test_forces_as_small_as_a_float_can_be`` and the
-    defect ``test_a_line_at_rest_under_a_force_below_its_rounding``)."""
+    own in test_general_model.py (``test_forces_as_small_as_a_float_can_be``,
+    ``test_a_line_at_rest_under_a_force_below_its_rounding``,
+    ``test_a_ball_pressed_on_a_linear_wall_by_a_force_below_its_rounding``)."""
     return st.just(0.0) | st.builds(lambda f, sign: sign * f, st.floats(1e-6 * scale, scale),
                                     st.sampled_from([1.0, -1.0]))
 

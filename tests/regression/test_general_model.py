@@ -283,20 +283,39 @@ def test_a_pair_pressed_together_stays_in_contact_when_rounding_parts_it():
         sol.positions[-1] - line.position)))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "solver defect: the scales of a line at rest come from its force alone; a force of "
-    "4e-154 gives a length scale of 4e-62, and the ball's place in those units, 1e62, "
-    "overflows the contact's energy: 'state became non-finite at t = 0'"))
 def test_a_line_at_rest_under_a_force_below_its_rounding():
-    # Found by the fuzzer, which runs a line for 30 of its time scales (3e47 here).
-    # Over that time the force moves ball 2 by about 1e-60, pressed on the wall: the
-    # run ends with the balls where they started, to far below 1e-15.
+    # Found by the fuzzer, which runs a line for 30 of its time scales. The scales came
+    # from the force and the contact of exponent 2.5 (a length of 4e-62), in which the
+    # linear wall had a stiffness of 1e92 and the run ended at t = 0, non-finite. The
+    # force presses ball 2 on the wall by f/k_R = 4e-154: the run ends with the balls
+    # where they started, to far below 1e-15.
     line = Line.make(2, stiffness=1.0919, alpha=2.5, velocity=np.zeros(2),
                      force=[0.0, 4.18e-154], right=Wall(1.0, 1.0))
     t_end = 30.0 * line.scales().time
     sol = run(line, [t_end], t_end=t_end)
     assert_ok(sol, terminal=False)
     np.testing.assert_allclose(sol.positions[-1], line.position, rtol=0, atol=1e-15)
+
+
+def test_a_ball_pressed_on_a_linear_wall_by_a_force_below_its_rounding():
+    # The mirror of the line above, on a left wall, with its own mass and stiffness.
+    # Ball 1, touching the wall at rest, is pushed into it by f; ball 2, untouched, stays
+    # at rest. Ball 1 is then a linear oscillator about its static compression f/k_L:
+    # x_1 = -(f/k_L) (1 - cos(w t)), w = sqrt(k_L/m_1), as long as it stays in contact
+    # (it does: the compression never falls below 0). The motion, 1e-154 in size, is
+    # resolved to the closed form's tolerance relative to its amplitude.
+    f, m1, k_wall = 4.18e-154, 2.0, 0.7
+    line = Line.make(2, mass=[m1, 1.0], stiffness=1.0919, alpha=2.5, velocity=np.zeros(2),
+                     force=[-f, 0.0], left=Wall(k_wall, 1.0))
+    times = np.linspace(0.0, 30.0, 61)
+    sol = run(line, times, t_end=30.0)
+    assert_ok(sol, terminal=False)
+    w, amplitude = math.sqrt(k_wall / m1), f / k_wall
+    np.testing.assert_allclose(sol.positions[:, 0] / amplitude, -(1.0 - np.cos(w * times)),
+                               rtol=0, atol=TOL["closed_form"])
+    np.testing.assert_allclose(sol.velocities[:, 0] / (amplitude * w), -np.sin(w * times),
+                               rtol=0, atol=TOL["closed_form"])
+    assert np.all(sol.positions[:, 1] == 0.0) and np.all(sol.velocities[:, 1] == 0.0)
 
 
 def test_a_contact_grazing_under_forces_keeps_the_energy():
