@@ -477,7 +477,7 @@ def transmission(inputs: Inputs) -> Result:
     """A driven dimer chain: the transmission curve of its frequency sweep, the line's
     modes and bands, and its stop bands as the sweep sees them against the closed forms
     of the infinite dimer chain's band edges."""
-    from chainrun.analysis.transmission import measure_sweep
+    from chainrun.analysis.transmission import MIN_PERIODS, STEADY, measure_sweep
 
     r = Result()
     runs = inputs.runs("gallery/transmission-dimer")
@@ -485,12 +485,17 @@ def transmission(inputs: Inputs) -> Result:
     f = t["frequency"].values
     first, last = int(t["sensor"].values[0]), int(t["sensor"].values[-1])
     curve = t["transmission"].sel(harmonic=1).transpose("frequency", "sensor").values
+    steady = t["steady"].transpose("frequency", "sensor")
     for name, value in (("frequency", f), ("sensor", t["sensor"].values),
-                        ("transmission", curve), ("periods", t["periods"].values),
+                        ("transmission", curve), ("steady", steady.values),
+                        ("periods", t["periods"].values),
                         ("mode_frequency", t["mode_frequency"].values),
                         ("band_bottom", t["band_bottom"].values),
                         ("band_top", t["band_top"].values)):
         r.array(f"curve/{name}", value)
+    # the rule ``steady`` was decided by, for the figure's legend
+    r.attrs["curve"] = {key: steady.attrs[key] for key in ("residual_fraction",
+                                                           "min_periods")}
     r.setting("description", runs[0].parameters["config_resolved"].get("description", ""))
     r.setting("measure", f"least squares at the drive's frequency over whole periods at the "
                          f"end of each run (chainrun.analysis.transmission); stopped: ball "
@@ -543,6 +548,11 @@ def transmission(inputs: Inputs) -> Result:
     r.value("mid_gap_mu", mu, "the infinite chain's decay per cell at mid-gap")
     r.value("mid_gap_decay", np.exp(-mu * cells), f"e^(-mu {cells}): its decay over the "
                                                   f"chain's {cells} cells")
+    for s, ball in enumerate(t["sensor"].values):
+        r.value(f"not_steady_{ball}", int(np.sum(~steady.values[:, s])),
+                f"sweep frequencies (of {f.size}) at which ball {ball}'s response is not "
+                f"steady (residual over {STEADY:g} of the amplitude, or under "
+                f"{MIN_PERIODS} periods): drawn hollow")
     r.value("periods_min", int(t["periods"].values.min()), "fewest periods fitted in a run")
     r.value("periods_max", int(t["periods"].values.max()), "most periods fitted in a run")
     return r

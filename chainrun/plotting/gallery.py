@@ -5,7 +5,7 @@ two groups; every series names its ``panel`` (0 or 1) and, for markers, the pape
 symbol it takes (``marker``). ``draw(data)`` lays the panels out and labels the axes of
 each item; nothing is computed here. ``gallery-transmission`` is the transmission
 curve of ``chainrun plot OUTDIR`` (``chainrun.plotting.transmission``), drawn from the
-arrays its analysis file keeps.
+arrays its analysis file keeps: its points that are not steady hollow, as there.
 """
 
 from __future__ import annotations
@@ -60,13 +60,17 @@ def _transmission(data) -> Figure:
 
     a = {key.partition("/")[2]: value for key, value in data.arrays.items()
          if key.startswith("curve/")}
-    ds = xr.Dataset(
-        {"transmission": (("frequency", "sensor", "harmonic"), a["transmission"][:, :, None]),
-         "periods": ("frequency", a["periods"]),
-         "mode_frequency": ("mode", a["mode_frequency"]),
-         "band_bottom": ("branch", a["band_bottom"]), "band_top": ("branch", a["band_top"])},
-        coords={"frequency": a["frequency"], "sensor": a["sensor"], "harmonic": [1]},
-        attrs={"units": "SI", "driven_wall": "left"})
+    variables = {
+        "transmission": (("frequency", "sensor", "harmonic"), a["transmission"][:, :, None]),
+        "periods": ("frequency", a["periods"]),
+        "mode_frequency": ("mode", a["mode_frequency"]),
+        "band_bottom": ("branch", a["band_bottom"]), "band_top": ("branch", a["band_top"])}
+    if "steady" in a:   # with the rule it was decided by: the legend says it
+        variables["steady"] = (("frequency", "sensor"), a["steady"].astype(bool),
+                               data.attrs.get("curve", {}))
+    ds = xr.Dataset(variables, coords={"frequency": a["frequency"], "sensor": a["sensor"],
+                                       "harmonic": [1]},
+                    attrs={"units": "SI", "driven_wall": "left"})
     return draw_transmission(ds, data.settings.get("description", ""))
 
 

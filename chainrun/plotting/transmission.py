@@ -5,11 +5,12 @@ over a wall's drive frequency: each force sensor's transmission at the drive's
 frequency against that frequency, on a log scale, over the linear spectrum of the line
 at rest: for a periodic line its stop bands (the gaps, and above the top band) shaded
 grey and hatched, the band edges dashed; the normal modes of the finite line as ticks
-along the top. Curves take the views' colour-blind-safe cycle (``petroff10``, a line
-style and a marker each), which the grey shading leaves apart. Each artist carries a ``gid``
-naming the variable it shows. A point whose response is not steady (``steady``: the
-fit leaves too much, or too few periods) is drawn hollow: it is not a transmitted
-signal.
+along the top. Curves take the views' colour-blind-safe cycle (``petroff10``) where
+the caller asks for colour, and each a line style and a symbol of its own, which tell
+them apart in the paper's black and white too (the gallery's page) and which the grey
+shading leaves apart. Each artist carries a ``gid`` naming the variable it shows. A
+point whose response is steady is drawn filled; one that is not (``steady``: the fit
+leaves too much, or too few periods) hollow: it is not a transmitted signal.
 """
 
 from __future__ import annotations
@@ -25,6 +26,23 @@ from chainrun.units import axis_label
 __all__ = ["draw_transmission"]
 
 _STOP = dict(facecolor="0.9", edgecolor="0.72", hatch="////", linewidth=0.0)
+
+#: The sensors' symbols: the paper's that can be filled (diamond, square, triangle,
+#: ``MARKERS``), then more of the kind. A steady point is filled and one that is not
+#: hollow, so a symbol that has no inside (plus, cross) cannot mark a sensor here.
+_SYMBOLS = tuple(m for m in MARKERS if m.get("markerfacecolor") == "none") + tuple(
+    dict(marker=m, markersize=5) for m in ("o", "v", "p", "h"))
+
+
+def _symbol(i: int) -> dict:
+    """The i-th sensor's symbol and line style (the views' ``LINESTYLES``, which the
+    colour cycle pairs with its colours: in black and white, what tells the lines
+    apart between their symbols)."""
+    from chainrun.plotting import LINESTYLES
+
+    symbol = {key: value for key, value in _SYMBOLS[i % len(_SYMBOLS)].items()
+              if key != "markerfacecolor"}
+    return {**symbol, "linestyle": LINESTYLES[i % len(LINESTYLES)]}
 
 
 def _units(ds) -> str:
@@ -65,7 +83,8 @@ def draw_transmission(ds, title: str = "") -> Figure:
               else t.notnull())
     for i, ball in enumerate(ds["sensor"].values):
         (line,) = axes.plot(x, t.sel(sensor=ball).values, label=f"ball {ball}",
-                            gid=f"transmission/{ball}", **MARKERS[i % len(MARKERS)])
+                            gid=f"transmission/{ball}", **_symbol(i))
+        line.set_markerfacecolor(line.get_color())   # steady: filled
         handles.insert(i, line)
         loose = ~steady.sel(sensor=ball).values
         if loose.any():  # the same markers, hollow: not a transmitted signal
@@ -75,11 +94,11 @@ def draw_transmission(ds, title: str = "") -> Figure:
                       gid=f"not_steady/{ball}")
     if not bool(steady.all()):
         rule = steady.attrs
-        handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="white",
-                              markeredgecolor="0.2",
-                              label=f"not steady (residual over {rule['residual_fraction']:g} "
-                                    f"of the amplitude, or under {rule['min_periods']} "
-                                    "periods)"))
+        handles.append(Line2D([], [], linestyle="none", marker="o", markersize=5,
+                              markerfacecolor="white", markeredgecolor="0.2",
+                              label=f"hollow: not steady (residual over "
+                                    f"{rule['residual_fraction']:g} of the amplitude, or "
+                                    f"under {rule['min_periods']} periods)"))
     left = float(x.min() - 0.03 * (x.max() - x.min()))
     shown = modes[(scaled(modes) >= left) & (scaled(modes) <= right)]
     axes.plot(scaled(shown), np.ones_like(shown), transform=axes.get_xaxis_transform(),
@@ -92,7 +111,7 @@ def draw_transmission(ds, title: str = "") -> Figure:
     wall = ds.attrs.get("driven_wall", "driven")
     axes.set_ylabel(f"transmission: force amplitude / $K_w A$ ({wall} wall)")
     figure.legend(handles=handles, fontsize="small", loc="outside lower center",
-                  ncols=min(5, len(handles)), frameon=False)
+                  ncols=min(4, -(-len(handles) // 2)), frameon=False)   # two rows
     periods = ds["periods"].values
     fitted = (f"{periods.min()}" if periods.min() == periods.max()
               else f"{periods.min()}-{periods.max()}")

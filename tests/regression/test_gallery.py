@@ -324,3 +324,73 @@ def test_damped_items_from_configs_to_figure(tmp_path, name):
     assert values["speed_e_spread_damped"] < 1e-12   # Tsuji: no scale of speed
     kk = [values[f"speed_e_{c}cms_kk"] for c in (5, 20, 80, 320)]
     assert kk == sorted(kk, reverse=True)             # viscoelastic: falls with the speed
+
+
+# ----------------------------------------------------------------------- transmission
+#: A small driven dimer chain in paper units standing in for the gallery's steel and
+#: aluminium one: masses 1 and 0.5, K = 1.5 at rest, so its bands end at 0.276 (acoustic)
+#: and 0.390-0.477 (optical). Driven in the acoustic band, mid-gap and above the top band.
+SMALL_DIMER = """name = "transmission-dimer"
+description = "A small dimer chain, driven."
+[chain]
+n = 10
+k = 0
+alpha = 1.5
+mass = {pattern = [1.0, 0.5]}
+precompression = 1.0
+[walls.left]
+motion = {amplitude = 1.0e-6, frequency = 0.2, ramp = 30.0}
+[walls.right]
+[output]
+sensors = [1, 10]
+sensor_dt = 0.05
+[solver]
+t_end = 120.0
+[sweep]
+"walls.left.motion.frequency" = [0.15, 0.2, 0.33, 0.6]
+"""
+
+
+def test_transmission_page_keeps_and_draws_which_points_are_not_steady(tmp_path):
+    """The gallery's transmission page draws from its analysis file alone: the file keeps
+    each point's ``steady`` flag and the rule behind it, and the page draws the points
+    that are not steady hollow, as ``chainrun plot`` does a sweep's."""
+    from chainrun.analysis import analyze
+    from chainrun.analysis.transmission import MIN_PERIODS, STEADY
+    from chainrun.plotting import draw, style
+    from chainrun.runner import simulate_experiment
+    from chainrun.store import read_analysis
+
+    config = tmp_path / "transmission-dimer.toml"
+    config.write_text(SMALL_DIMER)
+    runs = artefacts.run_dir("gallery/transmission-dimer", tmp_path)
+    simulate_experiment(load_experiment(config), runs, jobs=1)
+    data = read_analysis(analyze("gallery-transmission", results=tmp_path))
+    measured = chainrun.transmission(runs)
+    steady = data.arrays["curve/steady"]
+    assert steady.dtype == bool and steady.shape == (4, 2)   # (frequency, sensor)
+    np.testing.assert_array_equal(
+        steady, measured.steady.transpose("frequency", "sensor").values)
+    assert steady.any() and not steady.all()   # above the top band the far end is not
+    assert data.attrs["curve"] == {"residual_fraction": STEADY, "min_periods": MIN_PERIODS}
+    for s, ball in enumerate(data.arrays["curve/sensor"]):
+        assert data.values[f"not_steady_{ball}"] == np.sum(~steady[:, s])
+
+    with style():
+        figure = draw("gallery-transmission", data)
+    axes = figure.axes[0]
+    drawn = {a.get_gid(): a for a in axes.get_lines() if a.get_gid()}
+    for s, ball in enumerate(data.arrays["curve/sensor"]):
+        line = drawn[f"transmission/{ball}"]
+        assert line.get_markerfacecolor() == line.get_color()   # steady: filled
+        if steady[:, s].all():
+            assert f"not_steady/{ball}" not in drawn
+            continue
+        hollow = drawn[f"not_steady/{ball}"]
+        x, y = hollow.get_data()
+        np.testing.assert_array_equal(x, line.get_xdata()[~steady[:, s]])
+        np.testing.assert_array_equal(y, data.arrays["curve/transmission"][~steady[:, s], s])
+        assert hollow.get_markerfacecolor() == "white"
+        assert hollow.get_marker() == line.get_marker()
+    labels = [t.get_text() for t in figure.legends[0].get_texts()]
+    assert any(label.startswith("hollow: not steady") for label in labels), labels
