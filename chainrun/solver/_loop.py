@@ -344,6 +344,14 @@ def _end_ball(S, b, t):
     return x, v, S.bp[B_ACC, b]
 
 
+#: what the parts of one pass of ``advance`` tell it besides a status (ST_* >= 0): go
+#: round the loop again, go on to the next part, or go round after a step's worth of work
+#: (a sealed collision, counted against YIELD_STEPS like a step)
+AGAIN = -1
+GO_ON = -2
+COUNTED = -3
+
+
 @entry
 def advance(S):
     """Run until something needs the driver; return a status code (ST_*).
@@ -355,6 +363,10 @@ def advance(S):
     settle. With ``ints[I_TASK]`` set, the call evaluates the state at ``fs[F_TTASK]``
     instead (TASK_SNAPSHOT: every ball into ox, ov; TASK_SAMPLE: the balls of probe)
     and returns ST_OUTPUT.
+
+    Each pass: what the last step left (``_after_step``), a collision due now
+    (``_collide``), the stop time, free flight to the next collision (``_fly``), or
+    one step of the clusters (``_step_to_event``).
     """
     task = S.ints[I_TASK]
     if task != TASK_RUN:
@@ -366,221 +378,300 @@ def advance(S):
         return ST_OUTPUT
     nsteps = 0
     while True:
-        while S.ints[I_DIRTY] == 1:  # (a rebuild can take a sealed pair in: again)
-            need = _rebuild(S)
-            if need > 0:
-                S.ints[I_NEED] = need
-                return ST_GROW
-        t = S.fs[F_T]
-        # snapshots inside the last step, before its event reshapes the clusters
-        # (I_HAVEOUT 2: a sample of a few balls, which the driver takes with _sample)
-        if S.ints[I_HAVEOUT] != 0 and S.fs[F_TOUT] <= t:
-            if S.ints[I_HAVEOUT] == 1:
-                _snapshot(S, S.fs[F_TOUT])
-            S.ints[I_HAVEOUT] = 0
-            return ST_OUTPUT
-        if S.ints[I_POST] == 1:
-            if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 4:
-                return ST_FLUSH
-            S.ints[I_POST] = 0
-            if not _post_step(S):
-                return ST_DEFECT
+        st = _after_step(S)
+        if st == AGAIN:
             continue
-        if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
-            _unseal_at_end(S)
-            return ST_EVENT_LIMIT
+        if st != GO_ON:
+            return st
+        t = S.fs[F_T]
         tend = S.fs[F_TEND]
-        # next free-pair collision
-        tcol = np.inf
-        if _heap_valid_top(S):
-            tcol = S.hp_t[0]
-            if tcol <= t + 4.0 * EPS * abs(t):
-                # within the resolution of t (as _due takes it): the mirror image of a
-                # collision at this instant, its time rounded otherwise, is at this
-                # instant; a step that short moves no ball, and a contact closed now
-                # would neither press nor part in it
-                tcol = t
-            if tcol <= t and S.ev_t.shape[0] - S.ints[I_NEV] < 2:
-                return ST_FLUSH
-            if tcol <= t:
-                # collisions at one instant: each contact closes there at most a few
-                # times; more means states flipping back and forth, a defect that is
-                # reported (as by _settle) rather than run forever
-                if t == S.fs[F_TSAME]:
-                    S.ints[I_NSAME] += 1
-                    if S.ints[I_NSAME] > 4 * S.cst.shape[0] + 64:
-                        return ST_DEFECT
-                else:
-                    S.fs[F_TSAME] = t
-                    S.ints[I_NSAME] = 0
-                j = S.hp_j[0]
-                _heap_pop(S)
-                nc = S.cst.shape[0]
-                if j >= nc or (S.ints[I_PAIRS] == 1 and _seal(S, j)):
-                    # a sealed collision ends, or one begins (see _binary)
-                    if j >= nc:
-                        _sealed_end(S, j - nc)
-                    else:
-                        S.ints[I_NSEAL] += 1
-                    nsteps += 1
-                    if nsteps > YIELD_STEPS:
-                        return ST_YIELD
-                    continue
-                S.ints[I_EVJ] = j
-                S.ints[I_EVK] = EV_CLOSE
-                S.ints[I_POST] = 1
-                continue
+        tcol = _next_collision(S, t)
+        if tcol <= t:
+            st = _collide(S, t)
+            if st == COUNTED:
+                nsteps += 1
+                if nsteps > YIELD_STEPS:
+                    return ST_YIELD
+            elif st != AGAIN:
+                return st
+            continue
         if t >= tend:
             _unseal_at_end(S)
             return ST_STOP_TIME
         if S.ints[I_NCL] == 0:
             if tcol == np.inf and S.ints[I_FORCED] == 0:
                 return ST_TERMINAL  # (under external forces, free flight to tend)
-            # free flight: jump straight to the next collision (or the stop time)
-            tn = min(tcol, tend)
-            S.fs[F_TPREV] = t
-            S.fs[F_HLAST] = tn - t
-            S.fs[F_T] = tn
-            S.ints[I_JUMP] = 1
+            _fly(S, t, min(tcol, tend))
             continue
         nsteps += 1
         if nsteps > YIELD_STEPS:
             return ST_YIELD
-        # ---- one accepted step, ending at the earliest event if there is one ------------
-        # (a driven line's steps end at its drives' breakpoints too)
-        tbrk = _drive_begin(S, t) if S.ints[I_DRIVEN] == 1 else np.inf
-        _save_start(S)
-        # the series where it reaches further than DOP853's next step, else DOP853
-        h = S.fs[F_H]
-        # (not on a damped line, whose forces depend on the velocities)
-        ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS and S.ints[I_DAMPED] == 0 \
-            else 0.0
-        tay = ht >= h
-        S.ints[I_TAY] = 1 if tay else 0
+        st = _step_to_event(S, t, min(tcol, tend))
+        if st != AGAIN:
+            return st
+
+
+@kernel(inline="always")
+def _after_step(S):
+    """What the last step (or jump, or collision) left: the compact arrays packed again
+    after a change of structure, a snapshot due inside the step (before its event
+    reshapes the clusters), its event applied (``_post_step``); the event limit.
+
+    Returns a status for the driver, AGAIN after applying the step's event, or GO_ON.
+    """
+    while S.ints[I_DIRTY] == 1:  # (a rebuild can take a sealed pair in: again)
+        need = _rebuild(S)
+        if need > 0:
+            S.ints[I_NEED] = need
+            return ST_GROW
+    # (I_HAVEOUT 2: a sample of a few balls, which the driver takes with _sample)
+    if S.ints[I_HAVEOUT] != 0 and S.fs[F_TOUT] <= S.fs[F_T]:
+        if S.ints[I_HAVEOUT] == 1:
+            _snapshot(S, S.fs[F_TOUT])
+        S.ints[I_HAVEOUT] = 0
+        return ST_OUTPUT
+    if S.ints[I_POST] == 1:
+        if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 4:
+            return ST_FLUSH
+        S.ints[I_POST] = 0
+        if not _post_step(S):
+            return ST_DEFECT
+        return AGAIN
+    if S.ints[I_MAXEV] >= 0 and S.ints[I_EVTOTAL] >= S.ints[I_MAXEV]:
+        _unseal_at_end(S)
+        return ST_EVENT_LIMIT
+    return GO_ON
+
+
+@kernel(inline="always")
+def _next_collision(S, t):
+    """The time of the next predicted collision of free balls (or a sealed one's end),
+    inf if none; t itself if it is within the resolution of t (as _due takes it): the
+    mirror image of a collision at this instant, its time rounded otherwise, is at this
+    instant; a step that short moves no ball, and a contact closed now would neither
+    press nor part in it."""
+    if not _heap_valid_top(S):
+        return np.inf
+    tcol = S.hp_t[0]
+    if tcol <= t + 4.0 * EPS * abs(t):
+        return t
+    return tcol
+
+
+@kernel(inline="always")
+def _collide(S, t):
+    """Take the collision due at t off the heap: a sealed collision ends, or one begins
+    (``_binary``), and COUNTED is returned; else the contact closes after this pass
+    (AGAIN). Collisions at one instant close each contact at most a few times; more
+    means states flipping back and forth, a defect reported (as by _settle) rather than
+    run forever."""
+    if S.ev_t.shape[0] - S.ints[I_NEV] < 2:
+        return ST_FLUSH
+    if t == S.fs[F_TSAME]:
+        S.ints[I_NSAME] += 1
+        if S.ints[I_NSAME] > 4 * S.cst.shape[0] + 64:
+            return ST_DEFECT
+    else:
+        S.fs[F_TSAME] = t
+        S.ints[I_NSAME] = 0
+    j = S.hp_j[0]
+    _heap_pop(S)
+    nc = S.cst.shape[0]
+    if j >= nc or (S.ints[I_PAIRS] == 1 and _seal(S, j)):
+        if j >= nc:
+            _sealed_end(S, j - nc)
+        else:
+            S.ints[I_NSEAL] += 1
+        return COUNTED
+    S.ints[I_EVJ] = j
+    S.ints[I_EVK] = EV_CLOSE
+    S.ints[I_POST] = 1
+    return AGAIN
+
+
+@kernel(inline="always")
+def _fly(S, t, tn):
+    """No cluster: every ball flies freely to tn, the next collision or the stop time."""
+    S.fs[F_TPREV] = t
+    S.fs[F_HLAST] = tn - t
+    S.fs[F_T] = tn
+    S.ints[I_JUMP] = 1
+
+
+@kernel(inline="always")
+def _step_to_event(S, t, tstop):
+    """One accepted step of the clusters from t, ending at the earliest event found in
+    it (``_land``), or at tstop (the next collision or the stop time) or a drive's
+    breakpoint. Returns AGAIN, or a status where no step can be taken."""
+    tbrk = _drive_begin(S, t) if S.ints[I_DRIVEN] == 1 else np.inf
+    _save_start(S)
+    # the series where it reaches further than DOP853's next step, else DOP853
+    h = S.fs[F_H]
+    # (not on a damped line, whose forces depend on the velocities)
+    ht = _taylor(S) if S.ints[I_NCL] <= SERIES_CLUSTERS and S.ints[I_DAMPED] == 0 \
+        else 0.0
+    tay = ht >= h
+    S.ints[I_TAY] = 1 if tay else 0
+    if tay:
+        h = min(ht, S.fs[F_HCAP])
+    tclip = min(tstop, tbrk)
+    clipped = False
+    if t + h >= tclip:
+        h = tclip - t
+        clipped = True
+    S.fs[F_TPREV] = t
+    S.ints[I_JUMP] = 0
+    st, h, err, clipped, th, j, kind, lev = _trial(S, t, h, clipped, tay)
+    if st != GO_ON:
+        return st
+    if tay:
+        hnext = S.fs[F_H]  # DOP853's proposal stands; the series sizes its own steps
+    else:
+        hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
+    if j >= 0:
+        st = _land(S, t, h, err, hnext, th, j, kind, lev, tay)
+        if st != GO_ON:
+            return st
+    else:
+        S.fs[F_T] = tclip if clipped else t + h
+        if not tay:
+            S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
+    _commit_step(S, tay)
+    return AGAIN
+
+
+@kernel(inline="always")
+def _trial(S, t, h, clipped, tay):
+    """Try steps from t, shrinking h until one passes its error test or an event cuts it.
+
+    Returns (GO_ON or a status, h, its error / tolerance, whether h still ends at the
+    clip, and the earliest event in the step: its fraction th of h, contact j (-1:
+    none), kind and level).
+    """
+    order = PT if tay else 8
+    th = 0.0
+    j = -1
+    kind = 0
+    lev = 0.0
+    while True:
         if tay:
-            h = min(ht, S.fs[F_HCAP])
-        order = PT if tay else 8
-        tclip = min(tcol, tend, tbrk)
-        clipped = False
-        if t + h >= tclip:
-            h = tclip - t
-            clipped = True
-        S.fs[F_TPREV] = t
-        S.ints[I_JUMP] = 0
-        while True:
-            if tay:
-                # the series' truncation is known from h alone, and the event scan reads
-                # the few balls it needs from their series: the window is evaluated at
-                # h only if no event cuts the step (else at the event, by the landing)
-                S.fs[F_HLAST] = h
-                err = _taylor_error(S, h)
-                S.ints[I_XEND] = 0
-                th, j, kind, lev = _find_event(S)
-                if j < 0 and h > 64.0 * EPS * max(1.0, abs(t)) and _grazes(S, h):
-                    # past a graze the series is not to be trusted (_grazes): halve
-                    # until the step ends before the compression's minimum or keeps
-                    # it above half its start
-                    h *= 0.5
-                    S.ints[I_REJ] += 1
-                    clipped = False
-                    continue
-                if j < 0:
-                    err = _step(S, h)
-            else:
-                err = _step(S, h)
-                S.fs[F_HLAST] = h
-            if not np.isfinite(err):
-                if h < 1e-12 * max(1.0, abs(t)) or not np.isfinite(h):
-                    # (an infinite step: a cluster whose forces all vanish, grown
-                    # without bound, would never end)
-                    return ST_NON_FINITE
-                h *= 0.2
+            # the series' truncation is known from h alone, and the event scan reads
+            # the few balls it needs from their series: the window is evaluated at
+            # h only if no event cuts the step (else at the event, by the landing)
+            S.fs[F_HLAST] = h
+            err = _taylor_error(S, h)
+            S.ints[I_XEND] = 0
+            th, j, kind, lev = _find_event(S)
+            if j < 0 and h > 64.0 * EPS * max(1.0, abs(t)) and _grazes(S, h):
+                # past a graze the series is not to be trusted (_grazes): halve
+                # until the step ends before the compression's minimum or keeps
+                # it above half its start
+                h *= 0.5
                 S.ints[I_REJ] += 1
                 clipped = False
                 continue
-            if not tay:
-                th, j, kind, lev = _find_event(S)
-            if err <= 1.0:
-                break
+            if j < 0:
+                err = _step(S, h)
+        else:
+            err = _step(S, h)
+            S.fs[F_HLAST] = h
+        if not np.isfinite(err):
+            if h < 1e-12 * max(1.0, abs(t)) or not np.isfinite(h):
+                # (an infinite step: a cluster whose forces all vanish, grown
+                # without bound, would never end)
+                return ST_NON_FINITE, h, err, clipped, th, j, kind, lev
+            h *= 0.2
             S.ints[I_REJ] += 1
-            if j >= 0:
-                # a step over a contact's change of state fails its error test where the
-                # force is not smooth; the event cuts the step anyway: go and land on it
-                # (the landing step passes the test, or is halved and retried)
-                break
-            h *= max(0.2, 0.9 * err ** (-1.0 / order))
             clipped = False
-            if h < 8.0 * EPS * max(1.0, abs(t)):
-                return ST_STEP_UNDERFLOW
-        if tay:
-            hnext = S.fs[F_H]  # DOP853's proposal stands; the series sizes its own steps
-        else:
-            hnext = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0)))
+            continue
+        if not tay:
+            th, j, kind, lev = _find_event(S)
+        if err <= 1.0:
+            return GO_ON, h, err, clipped, th, j, kind, lev
+        S.ints[I_REJ] += 1
         if j >= 0:
-            # redo the step to end on the event, then refine by Newton on the step itself
-            hev = th * h
-            landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
-            nit = 0
-            while landing == 0:
-                if not (_step(S, hev) <= 1.0):
-                    landing = 2
-                    break
-                xl, vl, al = _end_ball(S, j, t + hev)
-                xr, vr, ar = _end_ball(S, j + 1, t + hev)
-                if kind == EV_UNLOAD or kind == EV_RELOAD:
-                    res, w, tol = _load_rate(S, j, xl - xr, vl - vr, al - ar)
-                else:
-                    res = (xl - xr) - lev
-                    w = vl - vr
-                    tol = _rounding(abs(xl) + abs(xr))
-                if abs(res) <= tol or w == 0.0:
-                    landing = 1
-                    break
-                dh = -res / w
-                nit += 1
-                if abs(dh) > 0.5 * hev or nit == 6:
-                    landing = 3  # the state stays that of the last step taken
-                    break
-                hev += dh
-            if landing == 2:
-                # the shorter step failed its error test: halve it and look again
-                # (a series step too: capped, or it would take the same step again)
-                _restore_start(S)
-                S.fs[F_H] = 0.5 * hev
-                if tay:
-                    S.fs[F_HCAP] = 0.5 * hev
-                S.ints[I_REJ] += 1
-                if hev < 8.0 * EPS * max(1.0, abs(t)):
-                    return ST_STEP_UNDERFLOW
-                continue
-            if landing == 3 and err > 1.0:
-                # an event seen only on a failed step, and not there on a good one:
-                # shrink the step as for any failed step
-                _restore_start(S)
-                S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / order))
-                if tay:
-                    S.fs[F_HCAP] = S.fs[F_H]
-                continue
-            S.fs[F_HLAST] = hev
-            S.fs[F_T] = t + hev
-            S.ints[I_EVJ] = j
-            S.ints[I_EVK] = kind
-            # shorter than the step just cut short: its error estimate spoke for a
-            # stretch that crossed the event, smoother than what follows it (after a
-            # contact opens, the balls it leaves change fastest)
-            S.fs[F_H] = min(hnext, AFTER_EVENT * h)
+            # a step over a contact's change of state fails its error test where the
+            # force is not smooth; the event cuts the step anyway: go and land on it
+            # (the landing step passes the test, or is halved and retried)
+            return GO_ON, h, err, clipped, th, j, kind, lev
+        h *= max(0.2, 0.9 * err ** (-1.0 / order))
+        clipped = False
+        if h < 8.0 * EPS * max(1.0, abs(t)):
+            return ST_STEP_UNDERFLOW, h, err, clipped, th, j, kind, lev
+
+
+@kernel(inline="always")
+def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
+    """Redo the step of h to end on the event found at th h (contact j's kind at level
+    lev), refined by Newton on the step itself. Returns GO_ON landed (the event waits
+    in I_EVJ, I_EVK), AGAIN where the step is to be tried again shorter (the state
+    restored to its start), or ST_STEP_UNDERFLOW."""
+    hev = th * h
+    landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
+    nit = 0
+    while landing == 0:
+        if not (_step(S, hev) <= 1.0):
+            landing = 2
+            break
+        xl, vl, al = _end_ball(S, j, t + hev)
+        xr, vr, ar = _end_ball(S, j + 1, t + hev)
+        if kind == EV_UNLOAD or kind == EV_RELOAD:
+            res, w, tol = _load_rate(S, j, xl - xr, vl - vr, al - ar)
         else:
-            S.fs[F_T] = tclip if clipped else t + h
-            if not tay:
-                S.fs[F_H] = max(hnext, S.fs[F_H]) if clipped else hnext
-        if S.ints[I_DAMPED] == 1:
-            _commit_dissipation(S)
-        if S.ints[I_DRIVEN] == 1:
-            if tay:
-                S.fs[F_WSTEP] = _series_work(S, S.fs[F_HLAST])
-            S.fs[F_WORK] += S.fs[F_WSTEP]
-        S.fs[F_JL] += S.fs[F_JSL]
-        S.fs[F_JR] += S.fs[F_JSR]
-        S.ints[I_STEPS] += 1
-        S.ints[I_POST] = 1
-        S.fs[F_HCAP] = np.inf
+            res = (xl - xr) - lev
+            w = vl - vr
+            tol = _rounding(abs(xl) + abs(xr))
+        if abs(res) <= tol or w == 0.0:
+            landing = 1
+            break
+        dh = -res / w
+        nit += 1
+        if abs(dh) > 0.5 * hev or nit == 6:
+            landing = 3  # the state stays that of the last step taken
+            break
+        hev += dh
+    if landing == 2:
+        # the shorter step failed its error test: halve it and look again
+        # (a series step too: capped, or it would take the same step again)
+        _restore_start(S)
+        S.fs[F_H] = 0.5 * hev
+        if tay:
+            S.fs[F_HCAP] = 0.5 * hev
+        S.ints[I_REJ] += 1
+        if hev < 8.0 * EPS * max(1.0, abs(t)):
+            return ST_STEP_UNDERFLOW
+        return AGAIN
+    if landing == 3 and err > 1.0:
+        # an event seen only on a failed step, and not there on a good one:
+        # shrink the step as for any failed step
+        _restore_start(S)
+        S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / (PT if tay else 8)))
+        if tay:
+            S.fs[F_HCAP] = S.fs[F_H]
+        return AGAIN
+    S.fs[F_HLAST] = hev
+    S.fs[F_T] = t + hev
+    S.ints[I_EVJ] = j
+    S.ints[I_EVK] = kind
+    # shorter than the step just cut short: its error estimate spoke for a
+    # stretch that crossed the event, smoother than what follows it (after a
+    # contact opens, the balls it leaves change fastest)
+    S.fs[F_H] = min(hnext, AFTER_EVENT * h)
+    return GO_ON
+
+
+@kernel(inline="always")
+def _commit_step(S, tay):
+    """Count what the accepted step did: the energy it dissipated, the drives' work, the
+    walls' impulses; its post-step work waits for the next pass (I_POST)."""
+    if S.ints[I_DAMPED] == 1:
+        _commit_dissipation(S)
+    if S.ints[I_DRIVEN] == 1:
+        if tay:
+            S.fs[F_WSTEP] = _series_work(S, S.fs[F_HLAST])
+        S.fs[F_WORK] += S.fs[F_WSTEP]
+    S.fs[F_JL] += S.fs[F_JSL]
+    S.fs[F_JR] += S.fs[F_JSR]
+    S.ints[I_STEPS] += 1
+    S.ints[I_POST] = 1
+    S.fs[F_HCAP] = np.inf
