@@ -1,6 +1,6 @@
 """One contact's compression over the last step: its series, samples and bounds.
 
-The event scan (``_events``) and the seasoning of fresh contacts (``_loop._season``)
+The event scan (``_events``) and the seasoning of fresh contacts (``_settle._season``)
 ask where a contact's compression can go within a step without locating anything:
 on a series step, from the series of the compression (``_contact_series``), sampled
 (``_sample_series``) or bounded by its Bernstein coefficients (``_bernstein_range``);

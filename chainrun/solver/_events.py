@@ -113,7 +113,7 @@ def _load_at(S, j, th):
 def _load_rate(S, j, c, w, a):
     """(load, its rate, its rounding) of damped contact j at compression c, rate w and
     relative acceleration a: what a step's ends say of the load (_find_event), and
-    Newton's residual where a step lands on an unload or a reload (_loop)."""
+    Newton's residual where a step lands on an unload or a reload (_stepping)."""
     cp = S.cp
     kappa = cp[C_KAPPA, j]
     al = cp[C_ALPHA, j]

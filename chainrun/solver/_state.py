@@ -77,6 +77,12 @@ ST_STEP_UNDERFLOW = 8
 # contact states that do not settle (a defect of the solver, not of the line): the
 # driver reports it; ST_GROW always carries the capacity needed in ints[I_NEED]
 ST_DEFECT = 9
+# what the parts of one pass of ``_loop.advance`` tell it besides a status (ST_* >= 0):
+# go round the loop again, go on to the next part, or go round after a step's worth of
+# work (a sealed collision, counted against YIELD_STEPS like a step)
+AGAIN = -1
+GO_ON = -2
+COUNTED = -3
 
 # ---- contact states -------------------------------------------------------------------
 DORMANT = 3

@@ -389,12 +389,12 @@ def test_series_against_an_independent_integration(n, k, alpha, t_end):
     rounding (the compiler may fuse a multiply-add in one and not the other)."""
     from scipy.integrate import solve_ivp
 
-    from chainrun.solver import _loop, _state, _steppers
+    from chainrun.solver import _state, _steppers, _stepping
 
     S = _stopped_state(n, k, alpha, t_end)
     m = int(S.ints[_state.I_M])
     assert m > 0 and S.ints[_state.I_JUMP] == 0
-    twin(_loop._save_start)(S)
+    twin(_stepping._save_start)(S)
     h = twin(_steppers._taylor)(S)
     assert 0.0 < h < np.inf
     S.ints[_state.I_TAY] = 1
@@ -488,11 +488,11 @@ def test_window_bounds_hold_every_contacts_compression(n, k, alpha, t_end):
     (_series_bounds, on the work tiles) excludes its level: every lane's compression,
     evaluated by numpy from the positions' series, lies within its bound, and an
     opening contact is not excluded."""
-    from chainrun.solver import _generated, _loop, _state, _steppers
+    from chainrun.solver import _generated, _state, _steppers, _stepping
 
     S = _stopped_state(n, k, alpha, t_end)
     m = int(S.ints[_state.I_M])
-    twin(_loop._save_start)(S)
+    twin(_stepping._save_start)(S)
     h = twin(_steppers._taylor)(S)
     assert h > 0.0
     for step in (h, 0.3 * h, 2.0 * h):  # the event scan's step, shorter or longer

@@ -200,8 +200,8 @@ SOLVER_LAYERS = {
     "_steppers": 4, "_pair_damped": 4, "build": 4, "_setup": 4,
     "_events": 5, "_pairs": 5, "_projection": 5,
     "_heap": 6, "_output": 6,
-    "_clusters": 7,
-    "_binary": 8,
+    "_clusters": 7, "_stepping": 7,
+    "_binary": 8, "_settle": 8,
     "_loop": 9,
     "_driver": 10,
     "": 11,  # the package itself
