@@ -189,7 +189,7 @@ def test_a_generic_cpu_gives_the_same_answers(tmp_path):
     CPU_TOL. They are cached in a folder of their own (``generic-cpu`` beside this
     machine's kernels, keyed by the solver's sources as they are), so this machine's
     cache is untouched, and only the first run after a change of the solver compiles
-    them (75 s or more)."""
+    them (100 s or more)."""
     from chainrun.solver._jit import cache_root
 
     path = tmp_path / "generic.npz"
