@@ -318,7 +318,16 @@ def test_a_ball_pressed_on_a_linear_wall_by_a_force_below_its_rounding():
     assert np.all(sol.positions[:, 1] == 0.0) and np.all(sol.velocities[:, 1] == 0.0)
 
 
-def test_a_ball_moving_at_a_speed_below_its_rounding_meets_a_linear_wall():
+@pytest.mark.parametrize("v", [
+    1e-100,
+    pytest.param(1e-34, marks=pytest.mark.xfail(strict=True, reason=(
+        "solver defect: the wall's time is 12 eps of the unit here, above its rounding, "
+        "so the scales stay the exponent-2.5 contact's; the integrator's smallest step "
+        "is 8 eps of the unit, too coarse for the wall's collision: 'step size "
+        "underflow at t = 0'. Lines whose fastest contact takes from eps to about 1e-12 "
+        "of the unit (the bound depends on rtol and the exponents) fail so"))),
+])
+def test_a_ball_moving_at_a_speed_below_its_rounding_meets_a_linear_wall(v):
     # The moving twin of the line at rest above: ball 2 starts at v = 1e-100 into the
     # linear wall it touches. The scales came from the speed and the contact of exponent
     # 2.5 (a time of 7e42), in which the wall's collision lasts 4e-43 of the unit: the
@@ -326,9 +335,9 @@ def test_a_ball_moving_at_a_speed_below_its_rounding_meets_a_linear_wall():
     # is a harmonic oscillator, x_2 = (v/w) sin(w t), w = sqrt(k_R/m_2), until t = pi/w,
     # when it leaves at -v (its energy kept). It then closes on ball 1, at rest, but by
     # t = 30 the contact of exponent 2.5 has pushed back with a force below
-    # 1.1 (30 v)^2.5 < 1e-245: the ball goes on freely, x_2 = -v (t - pi/w), and ball 1
-    # stays at rest, far below the rounding of v.
-    v, m2, k_wall = 1e-100, 1.0, 1.0
+    # 1.1 (30 v)^2.5, a change of speed far below the rounding of v (1e-47 of it at
+    # v = 1e-34): the ball goes on freely, x_2 = -v (t - pi/w), and ball 1 stays at rest.
+    m2, k_wall = 1.0, 1.0
     line = Line.make(2, stiffness=1.0919, alpha=2.5, velocity=[0.0, v],
                      right=Wall(k_wall, 1.0))
     times = np.linspace(0.0, 30.0, 61)
