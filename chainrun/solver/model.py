@@ -368,8 +368,11 @@ class Line:
         than the smallest step the integrator takes (8 eps of the unit): the run ends
         at t = 0, the step too small or the state non-finite. So where the smallest
         T_j is below the rounding of T (``T_j < eps T``, the same as ``V T_j < eps
-        V T``), that contact sets the scales (K_j, a_j): the one the motion meets
-        first in time, in which every contact has a stiffness of at most 1.
+        V T``), that contact sets the scales (K_j, a_j): the fastest, in whose units
+        every other contact i has a stiffness (T_j / T_i)^(a_i+1) of at most 1. That
+        makes the units finite and the start resolved; it cannot resolve both ends of
+        a line whose contact times span beyond the kernels' reach (slow collisions, of
+        1e16 units and more, end non-finite too).
         """
         kappa, alpha, gap = self.contact_params() if params is None else params
         m = self.mass
@@ -416,11 +419,11 @@ class Line:
             # each contact's own time at this speed, in logarithms: where one is below
             # the rounding of the median's, that contact sets the scales (``scales``'
             # docstring); the time itself is computed as before, to the bit
-            log_mv = math.log(mass), math.log(speed)
-            own = (log_mv[0] + (1.0 - alpha) * log_mv[1] - np.log(kappa)) / (alpha + 1.0)
+            log_m, log_v = math.log(mass), math.log(speed)
+            own = (log_m + (1.0 - alpha) * log_v - np.log(kappa)) / (alpha + 1.0)
+            log_time = (log_m + (1.0 - a0) * log_v - math.log(k0)) / (a0 + 1.0)
             j = int(np.argmin(own))
-            if own[j] < (log_mv[0] + (1.0 - a0) * log_mv[1] - math.log(k0)) / (a0 + 1.0) \
-                    + _LOG_EPS:
+            if own[j] < log_time + _LOG_EPS:
                 k0, a0 = float(kappa[j]), float(alpha[j])
         time = (mass * speed ** (1.0 - a0) / k0) ** (1.0 / (a0 + 1.0))
         return Scales(mass, speed * time, time)
