@@ -359,6 +359,20 @@ class Line:
         rounding of L (``L_j < eps L``), that contact sets the scales (K_j, a_j,
         L_j): the one the force actually moves, and every contact then has a
         stiffness of at most 1. Elsewhere, the median contact's scales stand.
+
+        A moving line has the same defect in time. At the speed V, contact j stops a
+        ball over its own time ``T_j = (M V^(1-a_j) / K_j)^(1/(a_j+1))`` and length
+        ``V T_j``; with mixed exponents these too part as a power of V (a linear wall
+        and a contact of exponent 2.5 at V = 1e-100: T_j / T = 1e-43). In units of T
+        that contact has a stiffness (T / T_j)^(a_j+1), and a collision far shorter
+        than the smallest step the integrator takes (8 eps of the unit): the run ends
+        at t = 0, the step too small or the state non-finite. So where the smallest
+        T_j is below the rounding of T (``T_j < eps T``, the same as ``V T_j < eps
+        V T``), that contact sets the scales (K_j, a_j): the fastest, in whose units
+        every other contact i has a stiffness (T_j / T_i)^(a_i+1) of at most 1. That
+        makes the units finite and the start resolved; it cannot resolve both ends of
+        a line whose contact times span beyond the kernels' reach (slow collisions, of
+        1e16 units and more, end non-finite too).
         """
         kappa, alpha, gap = self.contact_params() if params is None else params
         m = self.mass
@@ -401,6 +415,16 @@ class Line:
             log_speed = 0.5 * (log_length + math.log(f) - math.log(mass))
             log_time = (math.log(mass) + (1.0 - a0) * log_speed - math.log(k0)) / (a0 + 1.0)
             return Scales(mass, math.exp(log_speed + log_time), math.exp(log_time))
+        if not (_alike(kappa) and _alike(alpha)):
+            # each contact's own time at this speed, in logarithms: where one is below
+            # the rounding of the median's, that contact sets the scales (``scales``'
+            # docstring); the time itself is computed as before, to the bit
+            log_m, log_v = math.log(mass), math.log(speed)
+            own = (log_m + (1.0 - alpha) * log_v - np.log(kappa)) / (alpha + 1.0)
+            log_time = (log_m + (1.0 - a0) * log_v - math.log(k0)) / (a0 + 1.0)
+            j = int(np.argmin(own))
+            if own[j] < log_time + _LOG_EPS:
+                k0, a0 = float(kappa[j]), float(alpha[j])
         time = (mass * speed ** (1.0 - a0) / k0) ** (1.0 / (a0 + 1.0))
         return Scales(mass, speed * time, time)
 
