@@ -153,7 +153,7 @@ def judge(entry: dict, recorded: dict | None) -> dict:
     tol = entry["tolerance"]
     diffs = [entry["spread"]] + ([entry["against_recorded"]]
                                  if entry["against_recorded"] else [])
-    entry["within"] = all(d[k] <= tol[k] for d in diffs for k in d)
+    entry["within"] = all(d[k] <= tol.get(k, math.inf) for d in diffs for k in d)
     entry["met"] = bool(entry["within"] and all(r["balanced"] and r["terminal"]
                                                  for r in entry["runs"]))
     return entry
@@ -161,7 +161,9 @@ def judge(entry: dict, recorded: dict | None) -> dict:
 
 @dataclass
 class SteeredResult(Result):
-    """Per line (``lines``: label, n, k, its two runs, spread, tolerance, verdict)."""
+    """Per line (``lines_run``): its name, label, n, k, its two runs, the spread,
+    the tolerance and where it came from, the recorded run's differences, the verdict
+    (``met``: both runs balanced and terminal, every difference within tolerance)."""
 
     lines_run: list = field(default_factory=list)
 
@@ -196,9 +198,10 @@ class SteeredResult(Result):
                                             else f"{a[k]:.6f}")
                 vb = "" if k not in b else (f"{b[k]:d}" if isinstance(b[k], int)
                                             else f"{b[k]:.6f}")
-                t = e["tolerance"][k]
+                t = e["tolerance"].get(k)
                 out.append(f"  {name:<27} {va:>10} {vb:>10} {e['spread'][k]:9.2e} "
-                           + (f"{t:9d}" if isinstance(t, int) else f"{t:9.2e}")
+                           + (f"{'-':>9}" if t is None else f"{t:9d}" if isinstance(t, int)
+                              else f"{t:9.2e}")
                            + (f" {rec[k]:11.2e}" if rec and k in rec else ""))
             out.append(f"  tolerance from {e['tolerance_from']}")
         return out
