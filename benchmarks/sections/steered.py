@@ -159,6 +159,25 @@ def judge(entry: dict, recorded: dict | None) -> dict:
     return entry
 
 
+def failures(entry: dict) -> list[str]:
+    """What fails in a judged ``entry``, one phrase each (none when it is met)."""
+    out = []
+    for r in entry["runs"]:
+        at = f"rtol {r['rtol']:.0e}"
+        if abs(r["momentum_error"]) > MOMENTUM:
+            out.append(f"{at}: momentum {r['momentum_error']:.1e} > {MOMENTUM:g}")
+        if abs(r["energy_error"]) > ENERGY:
+            out.append(f"{at}: energy {r['energy_error']:.1e} > {ENERGY:g}")
+        if not r["terminal"]:
+            out.append(f"{at}: not terminal")
+    tol = entry["tolerance"]
+    for what, diffs in (("spread", entry["spread"]),
+                        ("vs recorded", entry.get("against_recorded") or {})):
+        out += [f"{STATS[k]} {what} {d:.2e} > {tol[k]:.2e}" for k, d in diffs.items()
+                if d > tol.get(k, math.inf)]
+    return out
+
+
 @dataclass
 class SteeredResult(Result):
     """Per line (``lines_run``): its name, label, n, k, its two runs, the spread,
@@ -179,7 +198,8 @@ class SteeredResult(Result):
             if e.get("error"):
                 out.append(head + e["error"])
                 continue
-            out.append(head + ("MET" if e["met"] else "NOT MET")
+            why = failures(e)
+            out.append(head + ("MET" if e["met"] else f"NOT MET ({'; '.join(why)})")
                        + f"; ball by ball the runs differ by up to {e['max_dv']:.3g} "
                        "(steered, not judged)")
             for r in e["runs"]:

@@ -640,9 +640,13 @@ def test_steered_section_judges_by_what_rounding_does_not_move(monkeypatch):
     assert e2["tolerance"] == tol and e2["against_recorded"]["fastest"] == 0.0
     assert "2026-11-27T16:00:00, commit aaaaaaaaaaaa" in e2["tolerance_from"]
     assert e2["within"] and not e2["met"] and not e2["runs"][0]["balanced"]
+    assert steered.failures(e2) == ["rtol 1e-12: energy 1.0e-08 > 1e-10",
+                                    "rtol 1e-13: energy 1.0e-08 > 1e-10"]
+    assert "NOT MET (rtol 1e-12: energy 1.0e-08 > 1e-10;" in "\n".join(again.lines())
     broken.update(energy=0.0, order=True)
     e3 = steered.run(harness.Context(mode, None, recorded=recorded)).lines_run[0]
     assert not e3["runs"][0]["terminal"] and not e3["met"]
+    assert "rtol 1e-12: not terminal" in steered.failures(e3)
     assert "terminal NO" in "\n".join(steered.SteeredResult([e3]).lines())
 
 
