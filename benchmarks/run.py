@@ -44,7 +44,7 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 
 Examples::
 
-    python -m benchmarks.run                 # default, 35-40 minutes
+    python -m benchmarks.run                 # default, about 50 minutes
     python -m benchmarks.run --full          # everything, the largest cases too
     python -m benchmarks.run --only peers scaling
     python -m benchmarks.run --only previous --against main~3
