@@ -55,14 +55,17 @@ def log(msg: str) -> None:
 @dataclass
 class Context:
     """What every section is given: its bounds (``benchmarks.run.Mode``), the process
-    runner, the run's notes, the previous section's revision, and the results of the
-    sections run before it in this run (the scaling section reuses the peers' runs)."""
+    runner, the run's notes, the previous section's revision, the results of the
+    sections run before it in this run (the scaling section reuses the peers' runs),
+    and the results file's entries as they were before this run (``recorded``: the
+    section ``steered`` judges by the tolerance it recorded)."""
 
     mode: object
     procs: "Processes"
     notes: list = field(default_factory=list)
     against: str | None = None
     results: dict = field(default_factory=dict)
+    recorded: dict = field(default_factory=dict)
 
 
 # --- the solver ----------------------------------------------------------------------------

@@ -23,6 +23,9 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
    N = 10^5 (3 s), K = 1; Hertz N = 10^4 no slower than the previous version is read
    in section previous.
 5. k80: N = 2000, K = 80, Hertz, to the terminal state.
+   steered: the K = 80 cascade and the random line N = 1000, whose ends rounding
+   steers, at rtol and rtol/10: balances, the terminal state checked from the final
+   state, and statistics of the final velocities within the spread first measured.
 6. memory: peak resident memory of ``chainrun simulate``, N = 10^6, 200 snapshots
    (and 2, to show it does not depend on their number).
 7. general: the paper's Hertz line against a random one (masses and stiffnesses
@@ -41,7 +44,7 @@ Sections (each bounded in time; ``--full`` lifts the bounds for the largest case
 
 Examples::
 
-    python -m benchmarks.run                 # default, 35-40 minutes
+    python -m benchmarks.run                 # default, about 50 minutes
     python -m benchmarks.run --full          # everything, the largest cases too
     python -m benchmarks.run --only peers scaling
     python -m benchmarks.run --only previous --against main~3
@@ -87,6 +90,10 @@ class Mode:
     peer_point_cap: float = 40.0      # a peer's predicted time above which N stops
     k80_timeout: float = 600.0
     k80_process: bool = False         # also time it as a whole process (as long again)
+    # steered: lines whose end rounding steers, in-process at rtol and rtol/10, each run
+    # stopped after steered_timeout seconds
+    steered: tuple = (Case("Hertz", 2000, k=80), Case.random(1000))
+    steered_timeout: float | None = 1800.0
     memory_t_end: float | None = 1000.0
     memory_n: int = 1_000_000
     # targets (issue 34's): whole processes to the terminal state, each within its limit
@@ -134,6 +141,8 @@ class Mode:
                        hertz_n=(100, 200, 400),
                        linear_n=(50, 100, 200), hertz_budget=10.0, linear_budget=10.0,
                        linear_peer_n=(30, 60), peer_point_cap=10.0, k80_timeout=5.0,
+                       steered=(Case("Hertz", 200, k=8), Case.random(60)),
+                       steered_timeout=60.0,
                        memory_t_end=20.0, memory_n=10_000,
                        targets=(Case("Hertz", 200, k=8, limit=10.0),
                                 Case.random(100, limit=3.0), Case.damped(100, limit=5.0),
@@ -156,6 +165,7 @@ class Mode:
                    hertz_budget=math.inf, linear_budget=math.inf,
                    linear_peer_n=(100, 300, 1000, 3000), peer_point_cap=600.0,
                    k80_timeout=3600.0, k80_process=True, memory_t_end=None,
+                   steered_timeout=None,
                    general_cap=4 * 3600.0, lammps_cap=math.inf)
 
 
@@ -221,7 +231,8 @@ def main(argv=None) -> int:
     results_file = args.results or (args.out / "results.json" if args.smoke
                                     else results.RESULTS)
     scratch = Path(tempfile.mkdtemp(prefix="chainrun-bench-"))
-    ctx = Context(mode, Processes(scratch), against=args.against)
+    ctx = Context(mode, Processes(scratch), against=args.against,
+                  recorded=results.load(results_file)["sections"])
     data = None
     try:
         # warm numba's cache (chainrun's kernels, the RK4 peer) before anything is timed

@@ -21,6 +21,7 @@ SECTIONS = {
     "scaling": "benchmarks.sections.scaling",
     "targets": "benchmarks.sections.targets",
     "k80": "benchmarks.sections.k80",
+    "steered": "benchmarks.sections.steered",
     "memory": "benchmarks.sections.memory",
     "general": "benchmarks.sections.general",
     "previous": "benchmarks.sections.previous",

@@ -587,3 +587,79 @@ def test_the_harness_imports_run_one_way():
                 if dst is not None and dst != src and rank[dst] > rank[src]:
                     wrong.append((name, target))
     assert not wrong, wrong
+
+
+def test_steered_section_judges_by_what_rounding_does_not_move(monkeypatch):
+    """Two runs whose velocities differ ball by ball but not in their statistics meet
+    the tolerance they set (MARGIN x their spread); a later run is judged by the
+    recorded tolerance, and a broken balance or a state that is not terminal fails."""
+    from types import SimpleNamespace
+
+    from benchmarks.sections import steered
+
+    n = 200
+    base = np.linspace(-0.2, 1.0, n)
+    finals = {1e-12: base, 1e-13: base + 1e-6 * np.linspace(0, 1, n)}
+    broken = {"energy": 0.0, "order": False}
+
+    def fake_solve(line, times=(), *, rtol=None, timeout=None, **kwargs):
+        v = finals[rtol].copy()
+        if broken["order"]:
+            v[[5, 6]] = v[[6, 5]] + np.array([0.0, -0.01])
+        x = 1e3 * v - np.arange(n) * 1e-3           # every contact open
+        d = SimpleNamespace(events=10, momentum_error=1e-14,
+                            energy_error=broken["energy"] or 2e-13, velocity_floor=rtol)
+        return SimpleNamespace(final_position=x, final_velocity=v, end_time=1e3,
+                               outcome=SimpleNamespace(value="terminal"), diagnostics=d)
+
+    monkeypatch.setattr(steered, "solve", fake_solve)
+    mode = run.Mode(full=False, steered=(harness.Case("Hertz", n, k=4),),
+                    steered_timeout=None)
+    got = steered.run(harness.Context(mode, None))
+    (e,) = got.lines_run
+    # terminal states are sorted along the line: the sorted profile's largest
+    # difference is the ball-by-ball one
+    assert e["max_dv"] == e["spread"]["sorted_max"] == pytest.approx(1e-6)
+    assert e["spread"]["sorted_mean"] == pytest.approx(0.5e-6) and e["met"]
+    assert all(r["terminal"] and r["balanced"] for r in e["runs"])
+    assert e["spread"]["backwards"] == 0 and e["runs"][0]["stats"]["backwards"] == 34
+    tol = e["tolerance"]
+    assert tol["fastest"] == pytest.approx(steered.MARGIN * 1e-6)
+    assert tol["p50"] == steered.FLOOR or tol["p50"] >= steered.MARGIN * e["spread"]["p50"]
+    text = "\n".join(got.lines())
+    assert "Hertz N = 200, K = 4: MET" in text and "tolerance from this run" in text
+    data = got.to_json()
+    assert "final_velocity" not in str(data)
+    assert steered.SteeredResult.from_json(data).lines() == got.lines()
+    # a later run reads the tolerance recorded, and compares with the recorded stats
+    recorded = {"steered": {"result": data, "date": "2026-11-27T16:00:00",
+                            "commit": "a" * 40}}
+    broken["energy"] = 1e-8
+    again = steered.run(harness.Context(mode, None, recorded=recorded))
+    (e2,) = again.lines_run
+    assert e2["tolerance"] == tol and e2["against_recorded"]["fastest"] == 0.0
+    assert "2026-11-27T16:00:00, commit aaaaaaaaaaaa" in e2["tolerance_from"]
+    assert e2["within"] and not e2["met"] and not e2["runs"][0]["balanced"]
+    assert steered.failures(e2) == ["rtol 1e-12: energy 1.0e-08 > 1e-10",
+                                    "rtol 1e-13: energy 1.0e-08 > 1e-10"]
+    assert "NOT MET (rtol 1e-12: energy 1.0e-08 > 1e-10;" in "\n".join(again.lines())
+    broken.update(energy=0.0, order=True)
+    e3 = steered.run(harness.Context(mode, None, recorded=recorded)).lines_run[0]
+    assert not e3["runs"][0]["terminal"] and not e3["met"]
+    assert "rtol 1e-12: not terminal" in steered.failures(e3)
+    assert "terminal NO" in "\n".join(steered.SteeredResult([e3]).lines())
+
+
+def test_steered_section_on_tiny_lines():
+    """Real runs: the terminal check agrees with the solver's, the balances hold."""
+    from benchmarks.sections import steered
+
+    mode = run.Mode.make(full=False, smoke=True)
+    assert [c.label for c in mode.steered] == ["Hertz", "random"]
+    mode.steered = (harness.Case("Hertz", 40, k=4), harness.Case.random(30))
+    got = steered.run(harness.Context(mode, None))
+    for e in got.lines_run:
+        assert not e.get("error")
+        for r in e["runs"]:
+            assert r["outcome"] == "terminal" and r["terminal"] and r["balanced"], r
+        assert e["met"]
