@@ -1,6 +1,6 @@
 """What several test files share: running the real ``chainrun simulate`` on a config,
-the paper's Table 1 as printed, building the paper's cheap artefacts, and the known
-solver defects."""
+the paper's Table 1 as printed, building the paper's cheap artefacts, the known solver
+defects, and the driven chain of the transmission tests."""
 
 from __future__ import annotations
 
@@ -56,3 +56,26 @@ def build(name: str, results: Path):
             spec = load_experiment(ROOT / "configs" / f"{experiment}.toml")
             simulate_experiment(spec, index.parent, jobs=1)
     return read_analysis(analyze(name, results=results))
+
+
+def driven_sweep(name: str, n: int, frequencies, *, mass=None, sensor_dt: float = 0.05,
+                 ramp: float = 30.0, t_end: float = 120.0, description: str | None = None) -> str:
+    """The transmission tests' experiment file: a Hertz line of ``n`` beads in paper
+    units (masses ``mass`` in turn, else 1) between two walls under a load of 1, its left
+    wall shaken by 1e-6 at each of ``frequencies`` (a sweep), starting over ``ramp``,
+    run to ``t_end``, with force sensors in its first and last beads."""
+    lines = [f'name = "{name}"']
+    if description is not None:
+        lines.append(f'description = "{description}"')
+    lines += ["[chain]", f"n = {n}", "k = 0", "alpha = 1.5"]
+    if mass is not None:
+        lines.append("mass = {pattern = [" + ", ".join(repr(float(m)) for m in mass) + "]}")
+    lines += ["precompression = 1.0", "[walls.left]",
+              f"motion = {{amplitude = 1.0e-6, frequency = {float(frequencies[0])!r}, "
+              f"ramp = {float(ramp)!r}}}",
+              "[walls.right]", "[output]", f"sensors = [1, {n}]",
+              f"sensor_dt = {float(sensor_dt)!r}", "[solver]", f"t_end = {float(t_end)!r}",
+              "[sweep]",
+              '"walls.left.motion.frequency" = ['
+              + ", ".join(repr(float(f)) for f in frequencies) + "]"]
+    return "\n".join(lines) + "\n"

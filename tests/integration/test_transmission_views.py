@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from helpers import simulate_text
+from helpers import driven_sweep, simulate_text
 
 import chainrun
 from chainrun.cli import main
@@ -16,23 +16,7 @@ from chainrun.errors import ChainrunError
 from chainrun.plotting import style
 from chainrun.plotting.transmission import draw_transmission
 
-SWEEP = """name = "shaken"
-[chain]
-n = 10
-k = 0
-alpha = 1.5
-precompression = 1.0
-[walls.left]
-motion = {amplitude = 1.0e-6, frequency = 0.2, ramp = 30.0}
-[walls.right]
-[output]
-sensors = [1, 10]
-sensor_dt = 0.05
-[solver]
-t_end = 120.0
-[sweep]
-"walls.left.motion.frequency" = [0.45, 0.2, 0.3]
-"""
+SWEEP = driven_sweep("shaken", 10, [0.45, 0.2, 0.3])
 
 
 @pytest.fixture(scope="module")

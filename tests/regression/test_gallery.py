@@ -22,6 +22,7 @@ from chainrun.runner import run_file, simulate_run
 from chainrun.solver import EventKind
 from chainrun.solver import restitution as two_body
 from chainrun.store import read_run
+from helpers import driven_sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -330,25 +331,8 @@ def test_damped_items_from_configs_to_figure(tmp_path, name):
 #: A small driven dimer chain in paper units standing in for the gallery's steel and
 #: aluminium one: masses 1 and 0.5, K = 1.5 at rest, so its bands end at 0.276 (acoustic)
 #: and 0.390-0.477 (optical). Driven in the acoustic band, mid-gap and above the top band.
-SMALL_DIMER = """name = "transmission-dimer"
-description = "A small dimer chain, driven."
-[chain]
-n = 10
-k = 0
-alpha = 1.5
-mass = {pattern = [1.0, 0.5]}
-precompression = 1.0
-[walls.left]
-motion = {amplitude = 1.0e-6, frequency = 0.2, ramp = 30.0}
-[walls.right]
-[output]
-sensors = [1, 10]
-sensor_dt = 0.05
-[solver]
-t_end = 120.0
-[sweep]
-"walls.left.motion.frequency" = [0.15, 0.2, 0.33, 0.6]
-"""
+SMALL_DIMER = driven_sweep("transmission-dimer", 10, [0.15, 0.2, 0.33, 0.6],
+                           mass=[1.0, 0.5], description="A small dimer chain, driven.")
 
 
 def test_transmission_page_keeps_and_draws_which_points_are_not_steady(tmp_path):

@@ -28,6 +28,7 @@ import pytest
 import chainrun
 from chainrun.config import parse_experiment
 from chainrun.runner import simulate_experiment
+from helpers import driven_sweep
 
 F0 = 1.0
 K = 1.5 * F0 ** (1.0 / 3.0)          # kappa = 1
@@ -93,25 +94,6 @@ def test_below_the_cutoff_the_finite_chain_transmits_its_forced_response():
     assert t.steady.values[clear].all() and not t.steady.sel(sensor=10)
 
 
-DIMER = """
-name = "dimer-transmission"
-[chain]
-n = 40
-k = 0
-alpha = 1.5
-mass = {{pattern = [1.0, 0.5]}}
-precompression = 1.0
-[walls.left]
-motion = {{amplitude = 1.0e-6, frequency = 0.3, ramp = 60.0}}
-[walls.right]
-[output]
-sensors = [1, 40]
-sensor_dt = 0.1
-[solver]
-t_end = 300.0
-[sweep]
-"walls.left.motion.frequency" = {frequencies}
-"""
 
 
 def test_a_dimer_chain_transmits_nothing_in_its_gap_and_its_edges_are_the_linear_ones(
@@ -121,7 +103,9 @@ def test_a_dimer_chain_transmits_nothing_in_its_gap_and_its_edges_are_the_linear
     edges = [w / (2 * math.pi) for w in edges]           # 0.2757, 0.3898, 0.4775
     step = 0.02
     frequencies = [round(0.20 + step * i, 2) for i in range(15)]   # 0.20 .. 0.48
-    experiment = parse_experiment(DIMER.format(frequencies=frequencies), "toml", "<test>")
+    experiment = parse_experiment(driven_sweep("dimer-transmission", 40, frequencies,
+                                               mass=[1.0, 0.5], sensor_dt=0.1, ramp=60.0,
+                                               t_end=300.0), "toml", "<test>")
     assert simulate_experiment(experiment, tmp_path).failures == []
     t = chainrun.transmission(tmp_path)
     np.testing.assert_array_equal(t.frequency.values, frequencies)
