@@ -486,8 +486,13 @@ def transmission(inputs: Inputs) -> Result:
     first, last = int(t["sensor"].values[0]), int(t["sensor"].values[-1])
     curve = t["transmission"].sel(harmonic=1).transpose("frequency", "sensor").values
     steady = t["steady"].transpose("frequency", "sensor")
+    # what the fit leaves over the amplitude at the drive's frequency: what ``steady`` is
+    # decided by, kept so that the page can say how far from steady a point is
+    residual = (t["residual"] / t["amplitude"].sel(harmonic=1)).transpose("frequency",
+                                                                           "sensor")
     for name, value in (("frequency", f), ("sensor", t["sensor"].values),
                         ("transmission", curve), ("steady", steady.values),
+                        ("residual_fraction", residual.values),
                         ("periods", t["periods"].values),
                         ("mode_frequency", t["mode_frequency"].values),
                         ("band_bottom", t["band_bottom"].values),
@@ -553,6 +558,15 @@ def transmission(inputs: Inputs) -> Result:
                 f"sweep frequencies (of {f.size}) at which ball {ball}'s response is not "
                 f"steady (residual over {STEADY:g} of the amplitude, or under "
                 f"{MIN_PERIODS} periods): drawn hollow")
+        r.value(f"gap_min_{ball}", curve[inside, s].min(),
+                f"the least transmission to ball {ball} in the gap")
+    left = residual.values[:, -1] * far   # over K_w A, as the transmission is
+    r.value("residual_floor", np.median(left[inside]),
+            f"median over the gap of what the fit leaves at ball {last}, over K_w A: what "
+            f"the start left in the line there")
+    kept = steady.values
+    r.value("steady_residual_max", float(residual.values[kept].max()) if kept.any() else np.nan,
+            "the largest residual over the amplitude at f among the steady points")
     r.value("periods_min", int(t["periods"].values.min()), "fewest periods fitted in a run")
     r.value("periods_max", int(t["periods"].values.max()), "most periods fitted in a run")
     return r

@@ -229,10 +229,10 @@ GALLERY_PRINTED: tuple[tuple[str, Printed], ...] = (
        "6.316", "gallery-transmission/gap_high_khz", rule="between", bounds=(6.066, 6.566),
        note="Agrees when within the sweep's step, 250 Hz. The closed form gives "
             "{gallery-transmission/optical_bottom_khz:.4f} kHz, chainrun's linear spectrum "
-            "{gallery-transmission/spectrum_optical_bottom_khz:.4f} kHz. A finite chain of "
-            "10 cells decays slowly near an edge (the decay per cell vanishes there) and "
-            "its first optical mode lies above the infinite chain's edge, so the driven "
-            "chain's gap ends a little above it."),
+            "{gallery-transmission/spectrum_optical_bottom_khz:.4f} kHz; the driven chain "
+            "stops up to {gallery-transmission/gap_high_khz:.2f} kHz. A finite chain of "
+            "10 cells decays slowly near an edge (the decay per cell vanishes there), so "
+            "the last frequency it stops at may lie a step either side of the edge."),
     _p("transmission.top", "transmission", _EDGES,
        "top of the optical band, sqrt(2K (1/m1 + 1/m2))/(2 pi) (kHz): the sweep's lowest "
        "frequency above the optical band at which the last bead gets under a tenth of the "
