@@ -22,6 +22,7 @@ import signal
 import click
 
 from chainrun import __version__
+from chainrun.cli.common import Commands
 from chainrun.cli.analyze import analyze
 from chainrun.cli.animate import animate
 from chainrun.cli.info import info
@@ -30,7 +31,7 @@ from chainrun.cli.simulate import simulate
 from chainrun.cli.spectrum import spectrum
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="chainrun")
 def main():
     """Exact, event-driven experiments on a line of balls: struck, driven or at rest.

@@ -9,10 +9,9 @@ from pathlib import Path
 
 import click
 
-from chainrun.cli.common import EXIT_BAD_INPUT, EXIT_FAILED_RUNS, fail
+from chainrun.cli.common import EXIT_BAD_INPUT, EXIT_FAILED_RUNS, EXIT_INTERRUPTED, fail
 from chainrun.errors import ChainrunError, ConfigError
 
-EXIT_INTERRUPTED = 130
 
 
 @click.command()

@@ -248,3 +248,22 @@ def test_a_runs_time_leaves_out_loading_the_kernels(tmp_path, monkeypatch):
                                "toml").runs()
     runner.simulate_run(spec, tmp_path)
     assert calls == ["load_kernels", "simulate"]
+
+
+def test_an_interruption_before_the_runs_begin_is_said_as_one(cli, tmp_path, monkeypatch):
+    # SIGINT while the experiment file is read (the command imports the solver and
+    # pydantic first, a second or more on a loaded machine): the same one line and exit
+    # status as an interruption inside the runs, not click's "Aborted!"
+    import chainrun.config
+
+    def interrupted(path):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(chainrun.config, "load_experiment", interrupted)
+    config = tmp_path / "line.toml"
+    config.write_text('name = "line"\n[chain]\nn = 3\nk = 1\nalpha = 1.5\n')
+    result = cli("simulate", config, "-o", tmp_path / "out")
+    assert result.exit_code == 130
+    assert "chainrun: error: interrupted" in result.output
+    assert "Aborted" not in result.output
+    assert not (tmp_path / "out").exists()
