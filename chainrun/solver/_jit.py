@@ -30,6 +30,7 @@ import contextlib
 import functools
 import hashlib
 import os
+import re
 import sys
 import threading
 import time
@@ -78,12 +79,15 @@ def entry(fn):
 ENTRY_MODULE = "_loop"
 
 
+#: an import of one of the package's modules, at any indentation (inside a function too)
+_IMPORT = re.compile(r"^[ \t]*from chainrun\.solver\.(\w+) import", re.MULTILINE)
+
+
 def kernel_sources(folder: Path = Path(__file__).parent) -> list[Path]:
     """The solver's files compiled into its entry point: ``ENTRY_MODULE`` and every
     module of the package it imports, directly or through another (found by reading
-    their ``import`` statements, not by running them)."""
-    import ast
-
+    their ``from chainrun.solver.X import`` lines, not by running them: a line like it
+    in a docstring adds a file to the key, which costs a compile at worst)."""
     seen: dict[str, Path] = {}
     todo = [ENTRY_MODULE]
     while todo:
@@ -92,11 +96,7 @@ def kernel_sources(folder: Path = Path(__file__).parent) -> list[Path]:
         if name in seen or not path.exists():
             continue
         seen[name] = path
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module:
-                parts = node.module.split(".")
-                if parts[:2] == ["chainrun", "solver"] and len(parts) == 3:
-                    todo.append(parts[2])
+        todo.extend(_IMPORT.findall(path.read_text()))
     return sorted(seen.values())
 
 
@@ -124,7 +124,10 @@ def cache_root() -> Path:
     return base / "chainrun"
 
 
+@functools.cache
 def cache_dir() -> Path:
+    """The folder of this process's kernels (read once: the sources a process runs do not
+    change under it)."""
     return cache_root() / f"kernels-{source_hash()[:16]}"
 
 
