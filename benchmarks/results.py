@@ -101,6 +101,11 @@ def _balls(n: int) -> str:
     return f"10^{k} balls" if n >= 10_000 and n == 10**k else f"{n} balls"
 
 
+def _times(ratio: float) -> str:
+    """A speed-up as text: 2,404x, 91x, 6.6x."""
+    return f"{ratio:,.0f}x" if ratio >= 10 else f"{ratio:.2g}x"
+
+
 def _span(xs) -> str:
     lo, hi = fmt_t(min(xs)), fmt_t(max(xs))
     return lo if lo == hi else f"{lo}-{hi}"
@@ -148,6 +153,19 @@ def readme_block(data: dict) -> str:
             sentences.append(f"To the terminal state as a whole process ({runs}): "
                              f"{', '.join(parts[:-1])}{', and ' if len(parts) > 1 else ''}"
                              f"{parts[-1]}.")
+    lammps = result_of(data, "lammps")
+    costs = [c for c in (lammps.cost or []) if c.get("ratio") and c.get("target")] \
+        if lammps else []
+    if costs:
+        used.append("lammps")
+        parts = [f"{_times(c['ratio'])} on the {c['kind']} line of {_balls(c['n'])} "
+                 f"(target {c['target']:g}x{'' if c['met'] else ', not met'}"
+                 f"{'' if c['lammps'].get('measured') else '; LAMMPS extrapolated'})"
+                 for c in costs]
+        sentences.append(
+            "Against LAMMPS on lines of steel beads, at the time step where its largest "
+            f"velocity error is {lammps.target_error:g} of the impact speed, chainrun "
+            f"(exact to rounding) is faster by {' and '.join(parts)}, whole processes.")
     comp = result_of(data, "compile")
     if comp and comp.compile_wall is not None:
         used.append("compile")

@@ -527,6 +527,30 @@ def test_a_section_replaces_its_own_entry_and_keeps_the_others(tmp_path):
     assert "load average 1.5 to 2.5" in block
 
 
+def test_the_readme_quotes_the_ratios_to_lammps_against_their_targets():
+    from benchmarks import results
+    from benchmarks.against_lammps import LammpsResult
+
+    meta = {"git_commit": "c" * 40, "mode": "default",
+            "machine": {"cpu": "x", "machine": "x86_64", "cpus": 2, "memory_gb": 24},
+            "versions": {"chainrun": "0"}}
+    cost = [dict(kind="elastic", n=2000, ratio=91.4, target=None, met=None,
+                 lammps={"measured": True}),
+            dict(kind="elastic", n=10_000, ratio=2403.6, target=200.0, met=True,
+                 lammps={"measured": False}),
+            dict(kind="damped", n=3000, ratio=6.64, target=20.0, met=False,
+                 lammps={"measured": True})]
+    data = {"sections": {"lammps": results.entry(
+        LammpsResult(cost=cost), meta=meta, date="2026-11-24T08:00:00",
+        load_start=(1.0, 1, 1), load_end=(1.0, 1, 1), wall=3.0, notes=[])}}
+    block = " ".join(results.readme_block(data).split())
+    # the lines with a target only, each against it, and whether LAMMPS's time was measured
+    assert ("faster by 2,404x on the elastic line of 10^4 balls (target 200x; LAMMPS "
+            "extrapolated) and 6.6x on the damped line of 3000 balls (target 20x, not "
+            "met), whole processes") in block
+    assert "2000 balls" not in block
+
+
 def test_the_solver_is_called_in_one_place():
     """Every benchmark runs chainrun's solver through ``harness.solve``: a change of
     the solver's entry point is adapted there. ``same_answers`` calls the solver of
