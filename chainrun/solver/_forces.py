@@ -152,23 +152,56 @@ def _damped_forces(X, V, F, MK, WP, DS, wgt, m, mode, alpha):
     DOP853's weights, the energy it dissipated over the step, to the method's order.
     (A lane held at 0 dissipates the elastic energy it still stores as its compression
     goes: _output._commit_dissipation counts that exactly, from the step's ends.)
+
+    Where the law and the damping's exponent are the window's own (a Hertz line under
+    Tsuji's or Kuwabara and Kono's law, a linear one under a dashpot), the pass is one
+    loop with both fixed and no branch, which vectorises; each lane's arithmetic is the
+    same as the general loop's, so the forces are the same to the bit.
     """
+    nc = m - 1
+    beta = _window_beta(WP[W_ETA], WP[W_BETA], nc)
+    if mode == MODE_HERTZ and beta == 0.25:
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_HERTZ, alpha, 0.25)
+    elif mode == MODE_HERTZ and beta == 0.5:
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_HERTZ, alpha, 0.5)
+    elif mode == MODE_LINEAR and beta == 0.0:
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_LINEAR, alpha, 0.0)
+    else:
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, mode, alpha, -1.0)
+
+
+@kernel(inline="always")
+def _window_beta(ETA, BETA, nc):
+    """The damping exponent of the damped lanes of the window, if they share one (-1 if
+    none is damped, -2 if they differ)."""
+    beta = -1.0
+    for p in range(nc):
+        if ETA[p] != 0.0:
+            if beta == -1.0:
+                beta = BETA[p]
+            elif BETA[p] != beta:
+                return -2.0
+    return beta
+
+
+@kernel(inline="always")
+def _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, mode, alpha, beta):
+    """The lanes' forces of ``_damped_forces``, the law fixed by ``mode`` and the
+    damping's exponent by ``beta`` (-1: each lane's own). Every lane's terms are
+    evaluated and the results chosen, not branched to, so that with both fixed the
+    loop has no branch."""
     AL, ETA, BETA, HELD = WP[W_ALPHA], WP[W_ETA], WP[W_BETA], WP[W_HELD]
-    for p in range(m - 1):
+    power = wgt != 0.0
+    for p in range(nc):
         eta = ETA[p]
-        if eta != 0.0 and HELD[p] != 0.0:
-            F[p] = 0.0
-            continue
         c = X[p] - X[p + 1]
         fe = _force(c, mode, AL[p] if mode == MODE_MIXED else alpha) * MK[p]
-        if eta == 0.0:
-            F[p] = fe
-            continue
         w = V[p] - V[p + 1]
-        fd = eta * _damping(c, w, BETA[p])
-        F[p] = fe + fd
-        if wgt != 0.0:
-            DS[p] += wgt * fd * w
+        fd = eta * _damping(c, w, BETA[p] if beta < 0.0 else beta)
+        bearing = eta != 0.0 and HELD[p] == 0.0
+        F[p] = fe if eta == 0.0 else (fe + fd if bearing else 0.0)
+        if power:
+            DS[p] = DS[p] + wgt * fd * w if bearing else DS[p]
 
 
 @kernel
