@@ -22,7 +22,7 @@ from chainrun.solver._compression import (
     _bernstein_range, _contact_series, _curvature_bound, _sample_series, _series_at,
     _stays_open,
 )
-from chainrun.solver._forces import _load
+from chainrun.solver._forces import _load, _power
 from chainrun.solver._generated import _series_bounds
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
@@ -121,14 +121,17 @@ def _load_rate(S, j, c, w, a):
     beta = cp[C_BETA, j]
     g = _contact_load(S, j, c, w)
     ac = abs(c)
-    dg = kappa * al * ac ** (al - 1.0) * w
+    fa = _power(ac, al - 1.0)
+    dg = kappa * al * fa * w
     if beta == 0.0:
         dg += eta * a
         damp = eta * w
     else:
-        dg += eta * (beta * ac ** (beta - 1.0) * w * w + ac ** beta * a)
-        damp = eta * ac ** beta * w
-    return g, dg, 16.0 * EPS * (kappa * ac ** al + abs(damp))
+        fb = _power(ac, beta)
+        # (|c|^(beta-1) from |c|^beta: no second power; at 0 pow's infinity)
+        dg += eta * (beta * (fb / ac if ac > 0.0 else ac ** (beta - 1.0)) * w * w + fb * a)
+        damp = eta * fb * w
+    return g, dg, 16.0 * EPS * (kappa * ac * fa + abs(damp))
 
 
 @kernel

@@ -34,7 +34,24 @@ def _force(c, mode, alpha):
     else:
         if c == 0.0:
             return 0.0
-        return c * abs(c) ** (alpha - 1.0)
+        return c * _power(abs(c), alpha - 1.0)
+
+
+@kernel(inline="always")
+def _power(a, e):
+    """a^e for a >= 0 and e >= 0: the named laws' exponents (Hertz's 1/2 in the force,
+    Tsuji's 1/4, 1 and 0) by square roots, as the force passes of a fixed law take them,
+    so that the contact an event scan evaluates is the one the step integrated (and
+    without pow, which costs several times a square root); any other by pow."""
+    if e == 0.5:
+        return np.sqrt(a)
+    if e == 0.25:
+        return np.sqrt(np.sqrt(a))
+    if e == 1.0:
+        return a
+    if e == 0.0:
+        return 1.0
+    return a ** e
 
 
 @kernel
@@ -111,14 +128,7 @@ def _series_terms(TX, r, G, IM, nc, s, unit):
 def _damping(c, w, beta):
     """|c|^beta w: the damping force of unit damping (the named laws' beta = 0, 1/2 and,
     for Hertz, Tsuji's 1/4 without a pow)."""
-    if beta == 0.0:
-        return w
-    a = abs(c)
-    if beta == 0.5:
-        return np.sqrt(a) * w
-    if beta == 0.25:
-        return np.sqrt(np.sqrt(a)) * w
-    return a ** beta * w
+    return _power(abs(c), beta) * w
 
 
 @kernel(inline="always")
