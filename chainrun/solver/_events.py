@@ -22,14 +22,15 @@ from chainrun.solver._compression import (
     _bernstein_range, _contact_series, _curvature_bound, _sample_series, _series_at,
     _stays_open,
 )
-from chainrun.solver._forces import _load, _power
+from chainrun.solver._forces import _load, _power, _window_beta
 from chainrun.solver._generated import _series_bounds
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     ACTIVE, C_ALPHA, C_BETA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, C_LOC, DORMANT, EPS,
     EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR,
     F_HLAST, HI_ROW, I_DAMPED, I_EVTOTAL, I_M, I_MODE, I_NCL, I_NEV, I_TAY, LO_ROW,
-    MODE_LINEAR, MODE_MIXED, N_SAMPLES, N_SERIES_SAMPLES, OPEN, PT, W_ALPHA, _tw,
+    MODE_HERTZ, MODE_LINEAR, MODE_MIXED, N_SAMPLES, N_SERIES_SAMPLES, OPEN, PT, W_ALPHA,
+    W_BETA, W_ETA, W_HELD, _tw,
 )
 from chainrun.solver._steppers import _ball_at, _ball_end
 
@@ -115,11 +116,18 @@ def _load_rate(S, j, c, w, a):
     relative acceleration a: what a step's ends say of the load (_find_event), and
     Newton's residual where a step lands on an unload or a reload (_stepping)."""
     cp = S.cp
-    kappa = cp[C_KAPPA, j]
-    al = cp[C_ALPHA, j]
-    eta = cp[C_ETA, j]
-    beta = cp[C_BETA, j]
-    g = _contact_load(S, j, c, w)
+    g, dg, scale = _load_and_rate(cp[C_KAPPA, j], cp[C_ALPHA, j], cp[C_ETA, j],
+                                  cp[C_BETA, j], c, w, a, True)
+    return g, dg, 16.0 * EPS * scale
+
+
+@kernel(inline="always")
+def _load_and_rate(kappa, al, eta, beta, c, w, a, exact_at_zero):
+    """(load, its rate, their scale) of a damped contact (stiffness kappa, exponent al,
+    damping eta |c|^beta) at compression c, rate w and relative acceleration a.
+    |c|^(beta-1) is taken as |c|^beta / |c|: at c = 0 that is NaN, where pow gives the
+    infinity the rate has there; ``exact_at_zero`` takes pow's there."""
+    g = _load(kappa, al, eta, beta, c, w)
     ac = abs(c)
     fa = _power(ac, al - 1.0)
     dg = kappa * al * fa * w
@@ -128,10 +136,59 @@ def _load_rate(S, j, c, w, a):
         damp = eta * w
     else:
         fb = _power(ac, beta)
-        # (|c|^(beta-1) from |c|^beta: no second power; at 0 pow's infinity)
-        dg += eta * (beta * (fb / ac if ac > 0.0 else ac ** (beta - 1.0)) * w * w + fb * a)
+        fbm = ac ** (beta - 1.0) if exact_at_zero and not ac > 0.0 else fb / ac
+        dg += eta * (beta * fbm * w * w + fb * a)
         damp = eta * fb * w
-    return g, dg, 16.0 * EPS * (kappa * ac * fa + abs(damp))
+    return g, dg, kappa * ac * fa + abs(damp)
+
+
+@kernel
+def _kinks_possible(S, h):
+    """Flag (``jbuf[p]`` 1, else 0) each damped lane of the window whose load may have
+    crossed 0 in the last step, of length h: all but those whose load at both ends is
+    on the side the contact is on (bearing: above 0; held at 0: below) by four times
+    what a parabola through its ends' rates could dip (h |g'_1 - g'_0| / 8).
+
+    One pass over the lanes, with the law and the damping's exponent fixed where the
+    window's lanes share them (as ``_forces._damped_forces``), so that it vectorises;
+    each lane's load and rate are those ``_load_rate`` gives, to the bit (where the
+    rate is not a number, at c = 0, neither test passes and the lane is flagged, as
+    with pow's infinity).
+    """
+    nc = S.ints[I_M] - 1
+    mode = S.ints[I_MODE]
+    beta = _window_beta(S.WP[W_ETA], S.WP[W_BETA], nc)
+    if mode == MODE_HERTZ and beta == 0.25:
+        _kink_lanes(S, h, nc, 1.5, 0.25)
+    elif mode == MODE_HERTZ and beta == 0.5:
+        _kink_lanes(S, h, nc, 1.5, 0.5)
+    elif mode == MODE_LINEAR and beta == 0.0:
+        _kink_lanes(S, h, nc, 1.0, 0.0)
+    else:
+        _kink_lanes(S, h, nc, -1.0, -1.0)
+
+
+@kernel(inline="always")
+def _kink_lanes(S, h, nc, alpha, beta):
+    """``_kinks_possible``'s pass, with the exponents ``alpha`` and ``beta`` (-1: each
+    lane's own)."""
+    X0, V0, A0, X, V, A = S.X0, S.V0, S.A0, S.X, S.V, S.A
+    KAPPA, AL, ETA, BETA, HELD = S.TR, S.WP[W_ALPHA], S.WP[W_ETA], S.WP[W_BETA], S.WP[W_HELD]
+    flag = S.jbuf
+    for p in range(nc):
+        kappa = KAPPA[p]
+        eta = ETA[p]
+        al = AL[p] if alpha < 0.0 else alpha
+        be = BETA[p] if beta < 0.0 else beta
+        g0, d0, _s0 = _load_and_rate(kappa, al, eta, be, X0[p] - X0[p + 1],
+                                     V0[p] - V0[p + 1], A0[p] - A0[p + 1], False)
+        g1, d1, _s1 = _load_and_rate(kappa, al, eta, be, X[p] - X[p + 1],
+                                     V[p] - V[p + 1], A[p] - A[p + 1], False)
+        margin = 0.5 * h * abs(d1 - d0)
+        held = HELD[p] != 0.0
+        quiet = (held & (g0 < -margin) & (g1 < -margin)) | \
+            (~held & (g0 > margin) & (g1 > margin))
+        flag[p] = 1 if (eta != 0.0) & ~quiet else 0
 
 
 @kernel
@@ -373,31 +430,17 @@ def _find_event(S):
                 bk = kind
                 blev = lev
     if S.ints[I_DAMPED] == 1:
-        # the kinks of the damped forces inside the clusters. A load whose ends are on
-        # the side the contact is on, by four times what a parabola through its
-        # ends' rates could dip (h |g'_1 - g'_0| / 8), is not sampled
-        for c in range(S.ints[I_NCL]):
-            lo = S.clo[c]
-            o = S.coff[c] - lo
-            for j in range(lo, S.chi[c]):
-                if S.cp[C_ETA, j] != 0.0:
-                    p = o + j
-                    g0, d0, _r0 = _load_rate(S, j, X0[p] - X0[p + 1], S.V0[p] - S.V0[p + 1],
-                                             A0[p] - A0[p + 1])
-                    g1, d1, _r1 = _load_rate(S, j, X[p] - X[p + 1], S.V[p] - S.V[p + 1],
-                                             A[p] - A[p + 1])
-                    margin = 0.5 * h * abs(d1 - d0)
-                    if S.cp[C_HELD, j] == 0.0:
-                        if g0 > margin and g1 > margin:
-                            continue
-                    elif g0 < -margin and g1 < -margin:
-                        continue
-                    th, kind = _unload_event(S, j, best)
-                    if th < best:
-                        best = th
-                        bj = j
-                        bk = kind
-                        blev = 0.0
+        # the kinks of the damped forces inside the clusters, sampled where one may be
+        # (_kinks_possible): the damped lanes are the clusters' inner contacts, in order
+        _kinks_possible(S, h)
+        for p in range(S.ints[I_M] - 1):
+            if S.jbuf[p] != 0:
+                th, kind = _unload_event(S, S.cb[p], best)
+                if th < best:
+                    best = th
+                    bj = S.cb[p]
+                    bk = kind
+                    blev = 0.0
     return best, bj, bk, blev
 
 
