@@ -45,7 +45,7 @@ def _log(S, t, j, kind):
     S.ints[I_EVTOTAL] += 1
 
 
-@kernel
+@kernel(inline="always")
 def _contact_at(S, j, th):
     """(compression, its rate, |x_l| + |x_r|) of contact j at t_prev + th * h_last."""
     xl, vl = _ball_at(S, j, th)
@@ -100,7 +100,7 @@ def _contact_load(S, j, c, w):
     return _load(cp[C_KAPPA, j], cp[C_ALPHA, j], cp[C_ETA, j], cp[C_BETA, j], c, w)
 
 
-@kernel
+@kernel(inline="always")
 def _load_at(S, j, th):
     """(_contact_load, compression) of contact j at t_prev + th * h_last."""
     if th <= 0.0 or th >= 1.0:
