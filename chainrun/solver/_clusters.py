@@ -30,7 +30,7 @@ from chainrun.solver._state import (
 )
 
 
-@kernel
+@kernel(inline="always")
 def _sync(S):
     """Write the compact state back to the balls (all at the current time).
 
@@ -232,7 +232,7 @@ def _unseal_near_clusters(S):
                 break
 
 
-@kernel
+@kernel(inline="always")
 def _rebuild(S):
     """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
     if S.ints[I_SEALED] > 0:

@@ -231,7 +231,7 @@ def _may_cross(c0, c1, reach, level):
     return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
 
 
-@kernel
+@kernel(inline="always")
 def _contact_event(S, j, hcap):
     """Earliest event of contact j in the last step before ``hcap``.
 
@@ -444,7 +444,7 @@ def _find_event(S):
     return best, bj, bk, blev
 
 
-@kernel
+@kernel(inline="always")
 def _grazes(S, h):
     """Whether a contact of the window passes a minimum of its compression inside the
     series step [0, h] (its rate below 0 at the start, above 0 at the end) and comes

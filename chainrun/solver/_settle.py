@@ -37,7 +37,7 @@ def _engage_level(S, j):
     return max(xl - xr, 0.0) + max(S.cp[C_EPS, j], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
-@kernel
+@kernel(inline="always")
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
@@ -65,7 +65,7 @@ def _apply_event(S, j, kind):
     return ok
 
 
-@kernel
+@kernel(inline="always")
 def _season(S):
     """Season the fresh contacts pressed beyond eps_rel in the last step (made ACTIVE).
 
@@ -89,7 +89,7 @@ def _season(S):
                     S.cst[j] = ACTIVE
 
 
-@kernel
+@kernel(inline="always")
 def _release_quiet(S):
     """Release the contacts below the floor.
 
@@ -190,7 +190,7 @@ def _due(S, j):
     return 0
 
 
-@kernel
+@kernel(inline="always")
 def _dormant_due(S):
     """Whether a dormant contact at a cluster's edge has been pressed (or pulled) past its levels."""
     ncont = S.cst.shape[0]
@@ -206,7 +206,7 @@ def _dormant_due(S):
     return False
 
 
-@kernel
+@kernel(inline="always")
 def _settle(S):
     """After a change of structure, apply every event due at this instant (positions synced)."""
     ncont = S.cst.shape[0]
@@ -264,7 +264,7 @@ def _loads_due(S):
                 _apply_event(S, j, EV_UNLOAD if not held else EV_RELOAD)
 
 
-@kernel
+@kernel(inline="always")
 def _post_step(S):
     """After an accepted step or jump: season contacts, then apply its event or release contacts."""
     if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:

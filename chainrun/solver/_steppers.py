@@ -39,7 +39,7 @@ from chainrun.solver._state import (
 )
 
 
-@kernel
+@kernel(inline="always")
 def _taylor(S):
     """Taylor series of every compact ball's x(t) at the step's start (X0, V0) to order PT.
 
@@ -174,7 +174,7 @@ def _series_impulse(S, lane, h):
     return (j + W[_tw(lane, f0)]) * h
 
 
-@kernel
+@kernel(inline="always")
 def _taylor_step(S, h):
     """Evaluate the series at h into (X, V, A); return the truncation estimate / tolerance.
 
@@ -227,7 +227,7 @@ def _taylor_error(S, h):
                S.fs[F_QV1] * h1 * h, S.fs[F_QV2] * h1)
 
 
-@kernel
+@kernel(inline="always")
 def _step(S, h):
     """Take a trial step of size h from (X0, V0, A0); results in X, V, A; return error norm.
 

@@ -24,7 +24,7 @@ from chainrun.solver._state import (
 from chainrun.solver._steppers import _step, _taylor, _taylor_error
 
 
-@kernel
+@kernel(inline="always")
 def _save_start(S):
     for p in range(S.ints[I_M]):
         S.X0[p] = S.X[p]
