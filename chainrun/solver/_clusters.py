@@ -30,7 +30,7 @@ from chainrun.solver._state import (
 )
 
 
-@kernel(inline="always")
+@kernel
 def _sync(S):
     """Write the compact state back to the balls (all at the current time).
 

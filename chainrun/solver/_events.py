@@ -231,7 +231,7 @@ def _may_cross(c0, c1, reach, level):
     return not (min(c0, c1) - reach > level or max(c0, c1) + reach < level)
 
 
-@kernel(inline="always")
+@kernel
 def _contact_event(S, j, hcap):
     """Earliest event of contact j in the last step before ``hcap``.
 
@@ -366,7 +366,7 @@ def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     return False
 
 
-@kernel
+@kernel(inline="always")
 def _find_event(S):
     """Scan the contacts touching clusters for the earliest event of the last step."""
     best = 2.0

@@ -71,7 +71,7 @@ def _cluster_energy(S, c):
     return en
 
 
-@kernel
+@kernel(inline="always")
 def _project_energy(S):
     """Restore each cluster's internal energy, conserved exactly between changes of structure.
 

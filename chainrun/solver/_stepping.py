@@ -105,15 +105,21 @@ def _trial(S, t, h, clipped, tay):
     kind = 0
     lev = 0.0
     while True:
+        S.fs[F_HLAST] = h
         if tay:
             # the series' truncation is known from h alone, and the event scan reads
             # the few balls it needs from their series: the window is evaluated at
             # h only if no event cuts the step (else at the event, by the landing)
-            S.fs[F_HLAST] = h
             err = _taylor_error(S, h)
             S.ints[I_XEND] = 0
+        else:
+            err = _step(S, h)
+        # a DOP853 step is scanned on its dense output, where its error is finite
+        # (one call for both methods: the scan is inlined)
+        if tay or np.isfinite(err):
             th, j, kind, lev = _find_event(S)
-            if j < 0 and h > 64.0 * EPS * max(1.0, abs(t)) and _grazes(S, h):
+        if tay and j < 0:
+            if h > 64.0 * EPS * max(1.0, abs(t)) and _grazes(S, h):
                 # past a graze the series is not to be trusted (_grazes): halve
                 # until the step ends before the compression's minimum or keeps
                 # it above half its start
@@ -121,11 +127,7 @@ def _trial(S, t, h, clipped, tay):
                 S.ints[I_REJ] += 1
                 clipped = False
                 continue
-            if j < 0:
-                err = _step(S, h)
-        else:
             err = _step(S, h)
-            S.fs[F_HLAST] = h
         if not np.isfinite(err):
             if h < 1e-12 * max(1.0, abs(t)) or not np.isfinite(h):
                 # (an infinite step: a cluster whose forces all vanish, grown
@@ -135,8 +137,6 @@ def _trial(S, t, h, clipped, tay):
             S.ints[I_REJ] += 1
             clipped = False
             continue
-        if not tay:
-            th, j, kind, lev = _find_event(S)
         if err <= 1.0:
             return GO_ON, h, err, clipped, th, j, kind, lev
         S.ints[I_REJ] += 1
