@@ -253,7 +253,7 @@ State = namedtuple(
         "ev_t", "ev_j", "ev_k",
         # snapshot buffer, and the balls a sample evaluates (TASK_SAMPLE)
         "ox", "ov", "probe",
-        # scratch lists of ball / contact indices, shape (N,)
+        # scratch lists of ball / contact indices, and flags of lanes, shape (N,)
         "freed", "jbuf",
         # scalars
         "fs", "ints",
