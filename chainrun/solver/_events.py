@@ -32,7 +32,7 @@ from chainrun.solver._state import (
     MODE_HERTZ, MODE_LINEAR, MODE_MIXED, N_SAMPLES, N_SERIES_SAMPLES, OPEN, PT, W_ALPHA,
     W_BETA, W_ETA, W_HELD, _tw,
 )
-from chainrun.solver._steppers import _ball_at, _ball_end
+from chainrun.solver._steppers import _ball_at, _ball_end, _dense_at, _poly
 
 
 @kernel(inline="always")
@@ -45,7 +45,7 @@ def _log(S, t, j, kind):
     S.ints[I_EVTOTAL] += 1
 
 
-@kernel(inline="always")
+@kernel
 def _contact_at(S, j, th):
     """(compression, its rate, |x_l| + |x_r|) of contact j at t_prev + th * h_last."""
     xl, vl = _ball_at(S, j, th)
@@ -100,13 +100,26 @@ def _contact_load(S, j, c, w):
     return _load(cp[C_KAPPA, j], cp[C_ALPHA, j], cp[C_ETA, j], cp[C_BETA, j], c, w)
 
 
-@kernel(inline="always")
+@kernel
 def _load_at(S, j, th):
     """(_contact_load, compression) of contact j at t_prev + th * h_last."""
     if th <= 0.0 or th >= 1.0:
         c, w, _s = _contact_end(S, j, th)
     else:
         c, w, _s = _contact_at(S, j, th)
+    return _contact_load(S, j, c, w), c
+
+
+@kernel(inline="always")
+def _load_inside(S, j, p, th):
+    """_load_at for a contact inside a cluster of a DOP853 step (its left ball at p in
+    the window, its interpolant built), read from the interpolant without a call per
+    sample: the same operations as _load_at's."""
+    if th <= 0.0 or th >= 1.0:
+        c, w, _s = _contact_end(S, j, th)
+    else:
+        c = _poly(S.FX, S.X0[p], p, th) - _poly(S.FX, S.X0[p + 1], p + 1, th)
+        w = _poly(S.FV, S.V0[p], p, th) - _poly(S.FV, S.V0[p + 1], p + 1, th)
     return _contact_load(S, j, c, w), c
 
 
@@ -203,11 +216,17 @@ def _unload_event(S, j, hcap):
     second one there. Returns (theta, kind), theta = 2 when there is none.
     """
     held = S.cp[C_HELD, j] != 0.0
+    # both balls are in the window (the contact is inside a cluster), and a damped
+    # line's steps are DOP853's: their interpolants, built here (on a damped line, the
+    # whole window's at once)
+    p = S.bmap[j]
+    _dense_at(S, p)
+    _dense_at(S, p + 1)
     ta = 0.0
     ga = _load_at(S, j, 0.0)[0]
     for i in range(1, N_SAMPLES + 1):
         tb = min(i / N_SAMPLES, hcap)
-        gb, cb_ = _load_at(S, j, tb)
+        gb, cb_ = _load_inside(S, j, p, tb)
         # (a load reaching exactly 0 is an unload: the compression's own opening at the
         # cap, where it is exactly 0, may come just after the unload)
         if not held and ga > 0.0 and gb <= 0.0:

@@ -280,7 +280,7 @@ def _dense(S):
     S.ints[I_DENSE] = 1
 
 
-@kernel(inline="always")
+@kernel
 def _dense_at(S, p):
     """Build the interpolant of compact ball p alone, unless it is built already.
 
