@@ -103,15 +103,20 @@ def _stage_pass(out_x: str, s: int, node: float, coefs, vcoefs, weight: float = 
     ]
 
 
-def _band_pass(s: int, reach: int, node: float, coefs) -> list[str]:
-    """Extra stage s on the balls within ``reach`` of p (positions) and within
-    ``reach - 1`` (accelerations), inside p's cluster o..e."""
+def _band_pass(s: int, reach: int, node: float, coefs, vcoefs) -> list[str]:
+    """Extra stage s on the balls within ``reach`` of p (positions, and on a damped line
+    velocities) and within ``reach - 1`` (accelerations), inside p's cluster o..e."""
     return [
         f"    lo = max(o, p - {reach})",
         f"    hi = min(e, p + {reach})",
         "    for q in range(lo, hi + 1):",
         f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
-        "    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
+        "    if damped:",
+        "        for q in range(lo, hi + 1):",
+        f"            VS[q] = V0[q] + {_combo(vcoefs, 'KV', 'h', 'q')}",
+        "        _damped_band(Xs, VS, F, MK, WP, lo, hi, mode, alpha)",
+        "    else:",
+        "        _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
         "    qa = lo if lo == o else lo + 1",
         "    qb = hi if hi == e else hi - 1",
         "    for q in range(qa, qb + 1):",
@@ -352,7 +357,8 @@ _HEADER = [
     "",
     "from chainrun.solver._drive import _drive_band, _drive_stage, _drive_terms",
     "from chainrun.solver._forces import (",
-    "    _accelerations, _damped_accelerations, _damped_forces, _forces, _load, _series_terms,",
+    "    _accelerations, _damped_accelerations, _damped_band, _damped_forces, _forces, _load,",
+    "    _series_terms,",
     ")",
     "from chainrun.solver._jit import kernel",
     "from chainrun.solver._state import (",
@@ -532,15 +538,18 @@ def generate() -> str:
         "def _dense_ball(S, p):",
         '    """The three extra stages of the dense output at compact ball p alone.',
         "",
-        "    Each stage's accelerations at a ball need its positions one ball further each",
-        "    way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is",
-        "    cut at the ends of p's cluster, where its forces stop. (Not on a damped line,",
-        "    whose forces need the velocities too: _dense_at builds the whole window's.)",
+        "    Each stage's accelerations at a ball need its positions (on a damped line, and",
+        "    velocities) one ball further each way, so the last stage at p needs the first",
+        "    on p - 3 .. p + 3. Every band is cut at the ends of p's cluster, where its",
+        "    forces stop. Each ball's stages are those the whole window's give",
+        "    (_dense_stages): the same operations.",
         '    """',
         "    mode = S.ints[I_MODE]",
         "    alpha = S.fs[F_ALPHA]",
         "    h = S.fs[F_HLAST]",
+        "    damped = S.ints[I_DAMPED] == 1",
         "    KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP",
+        "    VS = S.KV[KV_VS]",
         "    driven = S.ints[I_DRIVEN] == 1",
         "    t0 = S.fs[F_TPREV]",
         "    c = _find_cluster(S, S.cb[p])",
@@ -548,7 +557,7 @@ def generate() -> str:
         "    e = o + S.chi[c] - S.clo[c]",
     ]
     for s in range(ns + 1, nse):
-        lines += _band_pass(s, nse - s, C[s], AA[s, :s])
+        lines += _band_pass(s, nse - s, C[s], AA[s, :s], A[s, :s])
     dx = _nystrom(dop.D)
     lines += [
         "",

@@ -217,8 +217,7 @@ def _unload_event(S, j, hcap):
     """
     held = S.cp[C_HELD, j] != 0.0
     # both balls are in the window (the contact is inside a cluster), and a damped
-    # line's steps are DOP853's: their interpolants, built here (on a damped line, the
-    # whole window's at once)
+    # line's steps are DOP853's: their interpolants, built here
     p = S.bmap[j]
     _dense_at(S, p)
     _dense_at(S, p + 1)

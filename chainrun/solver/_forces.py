@@ -171,13 +171,21 @@ def _damped_forces(X, V, F, MK, WP, DS, wgt, m, mode, alpha):
     nc = m - 1
     beta = _window_beta(WP[W_ETA], WP[W_BETA], nc)
     if mode == MODE_HERTZ and beta == 0.25:
-        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_HERTZ, alpha, 0.25)
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, 0, nc, MODE_HERTZ, alpha, 0.25)
     elif mode == MODE_HERTZ and beta == 0.5:
-        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_HERTZ, alpha, 0.5)
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, 0, nc, MODE_HERTZ, alpha, 0.5)
     elif mode == MODE_LINEAR and beta == 0.0:
-        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, MODE_LINEAR, alpha, 0.0)
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, 0, nc, MODE_LINEAR, alpha, 0.0)
     else:
-        _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, mode, alpha, -1.0)
+        _damped_lanes(X, V, F, MK, WP, DS, wgt, 0, nc, mode, alpha, -1.0)
+
+
+@kernel
+def _damped_band(X, V, F, MK, WP, o, e, mode, alpha):
+    """Forces of the contact lanes o..e-1 at (X, V) into F, as ``_damped_forces`` gives
+    them (the same operations lane by lane; no power summed): a band of a few balls
+    (``_generated._dense_ball``)."""
+    _damped_lanes(X, V, F, MK, WP, F, 0.0, o, e, mode, alpha, -1.0)
 
 
 @kernel(inline="always")
@@ -195,14 +203,14 @@ def _window_beta(ETA, BETA, nc):
 
 
 @kernel(inline="always")
-def _damped_lanes(X, V, F, MK, WP, DS, wgt, nc, mode, alpha, beta):
-    """The lanes' forces of ``_damped_forces``, the law fixed by ``mode`` and the
-    damping's exponent by ``beta`` (-1: each lane's own). Every lane's terms are
-    evaluated and the results chosen, not branched to, so that with both fixed the
-    loop has no branch."""
+def _damped_lanes(X, V, F, MK, WP, DS, wgt, o, e, mode, alpha, beta):
+    """The forces of lanes o..e-1 of ``_damped_forces``, the law fixed by ``mode`` and
+    the damping's exponent by ``beta`` (-1: each lane's own); DS is not touched where
+    ``wgt`` is 0. Every lane's terms are evaluated and the results chosen, not branched
+    to, so that with both fixed the loop has no branch."""
     AL, ETA, BETA, HELD = WP[W_ALPHA], WP[W_ETA], WP[W_BETA], WP[W_HELD]
     power = wgt != 0.0
-    for p in range(nc):
+    for p in range(o, e):
         eta = ETA[p]
         c = X[p] - X[p + 1]
         fe = _force(c, mode, AL[p] if mode == MODE_MIXED else alpha) * MK[p]

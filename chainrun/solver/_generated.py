@@ -15,7 +15,8 @@ import numpy as np
 
 from chainrun.solver._drive import _drive_band, _drive_stage, _drive_terms
 from chainrun.solver._forces import (
-    _accelerations, _damped_accelerations, _damped_forces, _forces, _load, _series_terms,
+    _accelerations, _damped_accelerations, _damped_band, _damped_forces, _forces, _load,
+    _series_terms,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
@@ -334,15 +335,18 @@ def _dense_stages(S):
 def _dense_ball(S, p):
     """The three extra stages of the dense output at compact ball p alone.
 
-    Each stage's accelerations at a ball need its positions one ball further each
-    way, so the last stage at p needs the first on p - 3 .. p + 3. Every band is
-    cut at the ends of p's cluster, where its forces stop. (Not on a damped line,
-    whose forces need the velocities too: _dense_at builds the whole window's.)
+    Each stage's accelerations at a ball need its positions (on a damped line, and
+    velocities) one ball further each way, so the last stage at p needs the first
+    on p - 3 .. p + 3. Every band is cut at the ends of p's cluster, where its
+    forces stop. Each ball's stages are those the whole window's give
+    (_dense_stages): the same operations.
     """
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     h = S.fs[F_HLAST]
+    damped = S.ints[I_DAMPED] == 1
     KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP
+    VS = S.KV[KV_VS]
     driven = S.ints[I_DRIVEN] == 1
     t0 = S.fs[F_TPREV]
     c = _find_cluster(S, S.cb[p])
@@ -352,7 +356,12 @@ def _dense_ball(S, p):
     hi = min(e, p + 3)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.1 * V0[q] + h * (0.005054351963776213 * KV[0, q] + -0.41267006753617264 * KV[5, q] + -0.11888400830261192 * KV[6, q] + 0.5112504000718059 * KV[7, q] + -0.05239733207549385 * KV[8, q] + 0.06981946420649211 * KV[9, q] + 0.003198200361512927 * KV[10, q] + -0.0003710086893090569 * KV[11, q]))
-    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.056167502283047954 * KV[0, q] + 0.25350021021662483 * KV[6, q] + -0.2462390374708025 * KV[7, q] + -0.12419142326381637 * KV[8, q] + 0.15329179827876568 * KV[9, q] + 0.00820105229563469 * KV[10, q] + 0.007567897660545699 * KV[11, q] + -0.008298 * KV[12, q])
+        _damped_band(Xs, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     qa = lo if lo == o else lo + 1
     qb = hi if hi == e else hi - 1
     for q in range(qa, qb + 1):
@@ -363,7 +372,12 @@ def _dense_ball(S, p):
     hi = min(e, p + 2)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.2 * V0[q] + h * (0.009887781381457055 * KV[0, q] + -0.00760250313479944 * KV[5, q] + 0.047423345887574166 * KV[6, q] + -0.0363790659291871 * KV[7, q] + -0.021320408140087014 * KV[8, q] + 0.026772748548590852 * KV[9, q] + 0.0013364963323445063 * KV[10, q] + 0.001054215711719072 * KV[11, q] + -0.0011726106576121006 * KV[12, q]))
-    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.03183464816350214 * KV[0, q] + 0.028300909672366776 * KV[5, q] + 0.053541988307438566 * KV[6, q] + -0.05492374857139099 * KV[7, q] + -0.00010834732869724932 * KV[10, q] + 0.0003825710908356584 * KV[11, q] + -0.00034046500868740456 * KV[12, q] + 0.1413124436746325 * KV[13, q])
+        _damped_band(Xs, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     qa = lo if lo == o else lo + 1
     qb = hi if hi == e else hi - 1
     for q in range(qa, qb + 1):
@@ -374,7 +388,12 @@ def _dense_ball(S, p):
     hi = min(e, p + 1)
     for q in range(lo, hi + 1):
         Xs[q] = X0[q] + h * (0.7777777777777778 * V0[q] + h * (0.35886633997225575 * KV[0, q] + 9.38025080291835 * KV[5, q] + 7.477758624830405 * KV[6, q] + -15.729096304440624 * KV[7, q] + -0.3664913832247408 * KV[8, q] + 0.4520427193280568 * KV[9, q] + 0.024882489771726926 * KV[10, q] + 0.018743046880517162 * KV[11, q] + -0.02134289656466091 * KV[12, q] + -1.2931443036688188 * KV[13, q]))
-    _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (-0.42889630158379194 * KV[0, q] + -4.697621415361164 * KV[5, q] + 7.683421196062599 * KV[6, q] + 4.06898981839711 * KV[7, q] + 0.3567271874552811 * KV[8, q] + -0.0013990241651590145 * KV[12, q] + 2.9475147891527724 * KV[13, q] + -9.15095847217987 * KV[14, q])
+        _damped_band(Xs, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
     qa = lo if lo == o else lo + 1
     qb = hi if hi == e else hi - 1
     for q in range(qa, qb + 1):

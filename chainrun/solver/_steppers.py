@@ -32,7 +32,7 @@ from chainrun.solver._generated import (
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
-    F_TPREV, I_DAMPED, I_DCUR, I_DENSE, I_DRIVEN, I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE,
+    F_TPREV, I_DCUR, I_DENSE, I_DRIVEN, I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE,
     I_RWL, I_TAY, I_UNIT, I_XEND,
     MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
     _tw,
@@ -286,13 +286,9 @@ def _dense_at(S, p):
 
     An event search asks for the two balls of a contact or so per step; the three
     extra stages they need reach three balls each way (_dense_ball), so the cost does
-    not grow with the window. On a damped line, whose forces need the stage velocities
-    too, the whole window's is built.
+    not grow with the window. (A snapshot builds the whole window's at once: _dense.)
     """
     if S.ints[I_DENSE] == 1 or S.DM[p] == S.ints[I_DSTAMP]:
-        return
-    if S.ints[I_DAMPED] == 1:
-        _dense(S)
         return
     _dense_ball(S, p)
     _interp_rows(S, p)
