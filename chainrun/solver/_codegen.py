@@ -90,33 +90,39 @@ def _force_pass(x: str, s: int, v: str | None = None, vcoefs=None, weight: float
     ]
 
 
+def _drift(node: float, coefs, index: str) -> str:
+    """A stage's displacement over h: node V0 + h coefs @ KV (the first term alone where
+    the stage has no coefficients)."""
+    drift = f"{float(node)!r} * V0[{index}]"
+    if np.any(coefs != 0.0):
+        drift += f" + {_combo(coefs, 'KV', 'h', index)}"
+    return drift
+
+
 def _stage_pass(out_x: str, s: int, node: float, coefs, vcoefs, weight: float = 0.0
                 ) -> list[str]:
     """Stage s in Nystrom form: positions into out_x, accelerations into KV[s]."""
-    drift = f"{float(node)!r} * V0[p]"
-    if np.any(coefs != 0.0):
-        drift += f" + {_combo(coefs, 'KV', 'h')}"
     return [
         "    for p in range(m):",
-        f"        {out_x}[p] = X0[p] + h * ({drift})",
+        f"        {out_x}[p] = X0[p] + h * ({_drift(node, coefs, 'p')})",
         *_force_pass(out_x, s, vcoefs=vcoefs, weight=weight, node=node),
     ]
 
 
-def _band_pass(s: int, reach: int, node: float, coefs, vcoefs) -> list[str]:
-    """Extra stage s on the balls within ``reach`` of p (positions, and on a damped line
-    velocities) and within ``reach - 1`` (accelerations), inside p's cluster o..e."""
+def _band_pass(s: int, reach: int, node: float, coefs, vcoefs, out: str = "Xs") -> list[str]:
+    """Stage s on the balls within ``reach`` of p (positions into ``out``, and on a damped
+    line velocities) and within ``reach - 1`` (accelerations), inside p's cluster o..e."""
     return [
         f"    lo = max(o, p - {reach})",
         f"    hi = min(e, p + {reach})",
         "    for q in range(lo, hi + 1):",
-        f"        Xs[q] = X0[q] + h * ({float(node)!r} * V0[q] + {_combo(coefs, 'KV', 'h', 'q')})",
+        f"        {out}[q] = X0[q] + h * ({_drift(node, coefs, 'q')})",
         "    if damped:",
         "        for q in range(lo, hi + 1):",
         f"            VS[q] = V0[q] + {_combo(vcoefs, 'KV', 'h', 'q')}",
-        "        _damped_band(Xs, VS, F, MK, WP, lo, hi, mode, alpha)",
+        f"        _damped_band({out}, VS, F, MK, WP, lo, hi, mode, alpha)",
         "    else:",
-        "        _forces(Xs, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
+        f"        _forces({out}, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
         "    qa = lo if lo == o else lo + 1",
         "    qb = hi if hi == e else hi - 1",
         "    for q in range(qa, qb + 1):",
@@ -558,6 +564,58 @@ def generate() -> str:
     ]
     for s in range(ns + 1, nse):
         lines += _band_pass(s, nse - s, C[s], AA[s, :s], A[s, :s])
+    lines += [
+        "",
+        "",
+        "@kernel",
+        "def _step_band(S, h, p):",
+        '    """A DOP853 step of h from (X0, V0, A0) at compact balls p and p + 1 alone: their',
+        "    X, V and A at its end, the numbers the whole window's step gives them (the same",
+        "    operations).",
+        "",
+        "    Each stage's accelerations at a ball need the previous stage's positions (on a",
+        "    damped line, and velocities) one ball further each way, so the end's at p and",
+        f"    p + 1 need the first stage's on p - {ns + 1} .. p + {ns + 1}; the balls between hold the",
+        "    stages' values, not the step's. Every band is cut at the ends of p's cluster,",
+        "    where its forces stop. The walls' impulses, the drives' work, the damping's",
+        "    power and the error estimate are not taken: a step that is kept is taken whole",
+        "    (``_steppers._step``).",
+        '    """',
+        "    mode = S.ints[I_MODE]",
+        "    alpha = S.fs[F_ALPHA]",
+        "    damped = S.ints[I_DAMPED] == 1",
+        "    KV, X0, V0, X, V, F, MK, WP = S.KV, S.X0, S.V0, S.X, S.V, S.FS, S.TR, S.WP",
+        "    VS = S.KV[KV_VS]",
+        "    driven = S.ints[I_DRIVEN] == 1",
+        "    t0 = S.fs[F_TPREV]",
+        "    c = _find_cluster(S, S.cb[p])",
+        "    o = S.coff[c]",
+        "    e = o + S.chi[c] - S.clo[c]",
+        f"    for q in range(max(o, p - {ns + 1}), min(e, p + {ns + 1}) + 1):",
+        "        KV[0, q] = S.A0[q]",
+    ]
+    for s in range(1, ns):
+        lines += _band_pass(s, ns + 2 - s, C[s], AA[s, :s], A[s, :s], out="X")
+    lines += [
+        "    lo = max(o, p - 2)",
+        "    hi = min(e, p + 2)",
+        "    for q in range(lo, hi + 1):",
+        f"        X[q] = X0[q] + h * (V0[q] + {_combo(AA[ns, :ns], 'KV', 'h', 'q')})",
+        f"        V[q] = V0[q] + {_combo(B, 'KV', 'h', 'q')}",
+        "    if damped:",
+        "        _damped_band(X, V, F, MK, WP, lo, hi, mode, alpha)",
+        "    else:",
+        "        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
+        "    qa = lo if lo == o else lo + 1",
+        "    qb = hi if hi == e else hi - 1",
+        "    for q in range(qa, qb + 1):",
+        f"        KV[{ns}, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0))"
+        " * WP[W_IM, q] + WP[W_ACC, q]",
+        "    if driven:",
+        f"        _drive_band(S, KV[{ns}], t0 + 1.0 * h, qa, qb)",
+        "    for q in range(qa, qb + 1):",
+        f"        S.A[q] = KV[{ns}, q]",
+    ]
     dx = _nystrom(dop.D)
     lines += [
         "",

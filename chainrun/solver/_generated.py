@@ -402,6 +402,227 @@ def _dense_ball(S, p):
         _drive_band(S, KV[15], t0 + 0.7777777777777778 * h, qa, qb)
 
 
+@kernel
+def _step_band(S, h, p):
+    """A DOP853 step of h from (X0, V0, A0) at compact balls p and p + 1 alone: their
+    X, V and A at its end, the numbers the whole window's step gives them (the same
+    operations).
+
+    Each stage's accelerations at a ball need the previous stage's positions (on a
+    damped line, and velocities) one ball further each way, so the end's at p and
+    p + 1 need the first stage's on p - 13 .. p + 13; the balls between hold the
+    stages' values, not the step's. Every band is cut at the ends of p's cluster,
+    where its forces stop. The walls' impulses, the drives' work, the damping's
+    power and the error estimate are not taken: a step that is kept is taken whole
+    (``_steppers._step``).
+    """
+    mode = S.ints[I_MODE]
+    alpha = S.fs[F_ALPHA]
+    damped = S.ints[I_DAMPED] == 1
+    KV, X0, V0, X, V, F, MK, WP = S.KV, S.X0, S.V0, S.X, S.V, S.FS, S.TR, S.WP
+    VS = S.KV[KV_VS]
+    driven = S.ints[I_DRIVEN] == 1
+    t0 = S.fs[F_TPREV]
+    c = _find_cluster(S, S.cb[p])
+    o = S.coff[c]
+    e = o + S.chi[c] - S.clo[c]
+    for q in range(max(o, p - 13), min(e, p + 13) + 1):
+        KV[0, q] = S.A0[q]
+    lo = max(o, p - 13)
+    hi = min(e, p + 13)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.05260015195876773 * V0[q])
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.05260015195876773 * KV[0, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[1, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[1], t0 + 0.05260015195876773 * h, qa, qb)
+    lo = max(o, p - 12)
+    hi = min(e, p + 12)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.0789002279381516 * V0[q] + h * (0.003112622984346139 * KV[0, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.0197250569845379 * KV[0, q] + 0.0591751709536137 * KV[1, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[2, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[2], t0 + 0.0789002279381516 * h, qa, qb)
+    lo = max(o, p - 11)
+    hi = min(e, p + 11)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.1183503419072274 * V0[q] + h * (0.0017508504286947032 * KV[0, q] + 0.00525255128608411 * KV[1, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.02958758547680685 * KV[0, q] + 0.08876275643042054 * KV[2, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[3, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[3], t0 + 0.1183503419072274 * h, qa, qb)
+    lo = max(o, p - 10)
+    hi = min(e, p + 10)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.2816496580927726 * V0[q] + h * (0.009915816237971964 * KV[0, q] + -0.05234336665618132 * KV[1, q] + 0.0820908153700972 * KV[2, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.2413651341592667 * KV[0, q] + -0.8845494793282861 * KV[2, q] + 0.924834003261792 * KV[3, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[4, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[4], t0 + 0.2816496580927726 * h, qa, qb)
+    lo = max(o, p - 9)
+    hi = min(e, p + 9)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.3333333333333333 * V0[q] + h * (0.03533793130488635 * KV[0, q] + -0.09581915952175495 * KV[2, q] + 0.11603678377242414 * KV[3, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.037037037037037035 * KV[0, q] + 0.17082860872947386 * KV[3, q] + 0.12546768756682242 * KV[4, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[5, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[5], t0 + 0.3333333333333333 * h, qa, qb)
+    lo = max(o, p - 8)
+    hi = min(e, p + 8)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.25 * V0[q] + h * (0.018920483189113914 * KV[0, q] + -0.03815245266364541 * KV[2, q] + 0.05268745617004205 * KV[3, q] + -0.00220548669551055 * KV[4, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.037109375 * KV[0, q] + 0.17025221101954405 * KV[3, q] + 0.06021653898045596 * KV[4, q] + -0.017578125 * KV[5, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[6, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[6], t0 + 0.25 * h, qa, qb)
+    lo = max(o, p - 7)
+    hi = min(e, p + 7)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.3076923076923077 * V0[q] + h * (0.03067021189623757 * KV[0, q] + -0.07975482628537983 * KV[2, q] + 0.0979912056772412 * KV[3, q] + -0.0014238754814449106 * KV[4, q] + -0.00014543770014516837 * KV[5, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.03709200011850479 * KV[0, q] + 0.17038392571223998 * KV[3, q] + 0.10726203044637328 * KV[4, q] + -0.015319437748624402 * KV[5, q] + 0.008273789163814023 * KV[6, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[7, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[7], t0 + 0.3076923076923077 * h, qa, qb)
+    lo = max(o, p - 6)
+    hi = min(e, p + 6)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.6512820512820513 * V0[q] + h * (-0.15229089727622033 * KV[0, q] + 0.46966087733519885 * KV[2, q] + -0.06814140470279369 * KV[3, q] + 0.01071185753171531 * KV[4, q] + 0.31196985474604216 * KV[5, q] + -0.35982613247286355 * KV[6, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.6241109587160757 * KV[0, q] + -3.3608926294469414 * KV[3, q] + -0.868219346841726 * KV[4, q] + 27.59209969944671 * KV[5, q] + 20.154067550477894 * KV[6, q] + -43.48988418106996 * KV[7, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[8, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[8], t0 + 0.6512820512820513 * h, qa, qb)
+    lo = max(o, p - 5)
+    hi = min(e, p + 5)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.6 * V0[q] + h * (-0.11020716722377502 * KV[0, q] + 0.30128953154727944 * KV[2, q] + 0.07865735349516391 * KV[3, q] + 0.030838873981239242 * KV[4, q] + -0.31960414755130306 * KV[5, q] + -0.6851760518136165 * KV[6, q] + 0.8842016075650119 * KV[7, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (0.47766253643826434 * KV[0, q] + -2.4881146199716677 * KV[3, q] + -0.590290826836843 * KV[4, q] + 21.230051448181193 * KV[5, q] + 15.279233632882423 * KV[6, q] + -33.28821096898486 * KV[7, q] + -0.020331201708508627 * KV[8, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[9, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[9], t0 + 0.6 * h, qa, qb)
+    lo = max(o, p - 4)
+    hi = min(e, p + 4)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (0.8571428571428571 * V0[q] + h * (0.3721894995071433 * KV[0, q] + -0.5050736261155677 * KV[2, q] + -0.4614987464855827 * KV[3, q] + -0.06518509348541897 * KV[4, q] + 4.098038403866562 * KV[5, q] + 3.8922102844072377 * KV[6, q] + -7.025278165955339 * KV[7, q] + 0.06194438303648047 * KV[8, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (-0.9371424300859873 * KV[0, q] + 5.186372428844064 * KV[3, q] + 1.0914373489967295 * KV[4, q] + -8.149787010746927 * KV[5, q] + -18.52006565999696 * KV[6, q] + 22.739487099350505 * KV[7, q] + 2.4936055526796523 * KV[8, q] + -3.0467644718982196 * KV[9, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[10, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[10], t0 + 0.8571428571428571 * h, qa, qb)
+    lo = max(o, p - 3)
+    hi = min(e, p + 3)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (1.0 * V0[q] + h * (-0.7650750098382327 * KV[0, q] + 0.8347994820739504 * KV[2, q] + 1.7559441441931152 * KV[3, q] + 0.23253698859550578 * KV[4, q] + 11.903719357881853 * KV[5, q] + -1.9034949405460306 * KV[6, q] + -10.951226401858388 * KV[7, q] + 1.3530625395360725 * KV[8, q] + -1.9602661600378632 * KV[9, q]))
+    if damped:
+        for q in range(lo, hi + 1):
+            VS[q] = V0[q] + h * (2.273310147516538 * KV[0, q] + -10.53449546673725 * KV[3, q] + -2.0008720582248625 * KV[4, q] + -17.9589318631188 * KV[5, q] + 27.94888452941996 * KV[6, q] + -2.8589982771350235 * KV[7, q] + -8.87285693353063 * KV[8, q] + 12.360567175794303 * KV[9, q] + 0.6433927460157636 * KV[10, q])
+        _damped_band(X, VS, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[11, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[11], t0 + 1.0 * h, qa, qb)
+    lo = max(o, p - 2)
+    hi = min(e, p + 2)
+    for q in range(lo, hi + 1):
+        X[q] = X0[q] + h * (V0[q] + h * (0.05429373411656877 * KV[0, q] + 2.96687526183494 * KV[5, q] + 1.4186384244858756 * KV[6, q] + -4.016218126161175 * KV[7, q] + 0.10850859975965002 * KV[8, q] + -0.06086437986500647 * KV[9, q] + 0.028766485829147193 * KV[10, q]))
+        V[q] = V0[q] + h * (0.054293734116568765 * KV[0, q] + 4.450312892752409 * KV[5, q] + 1.8915178993145003 * KV[6, q] + -5.801203960010585 * KV[7, q] + 0.3111643669578199 * KV[8, q] + -0.1521609496625161 * KV[9, q] + 0.20136540080403034 * KV[10, q] + 0.04471061572777259 * KV[11, q])
+    if damped:
+        _damped_band(X, V, F, MK, WP, lo, hi, mode, alpha)
+    else:
+        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)
+    qa = lo if lo == o else lo + 1
+    qb = hi if hi == e else hi - 1
+    for q in range(qa, qb + 1):
+        KV[12, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0)) * WP[W_IM, q] + WP[W_ACC, q]
+    if driven:
+        _drive_band(S, KV[12], t0 + 1.0 * h, qa, qb)
+    for q in range(qa, qb + 1):
+        S.A[q] = KV[12, q]
+
+
 @kernel(inline="always")
 def _dense_rows(S, p):
     """Rows 3..6 of ball p's interpolant: h * D @ K for positions and velocities."""

@@ -27,15 +27,15 @@ from chainrun.solver._drive import _drive_ends, _drive_series, _drive_stage
 from chainrun.solver._forces import _force, _rhs
 from chainrun.solver._generated import (
     _dense_ball, _dense_rows, _dense_stages, _error_norm, _linear_orders, _series_orders,
-    _series_orders_mixed, _stages,
+    _series_orders_mixed, _stages, _step_band,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
     F_TPREV, I_DCUR, I_DENSE, I_DRIVEN, I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE,
     I_RWL, I_TAY, I_UNIT, I_XEND,
-    MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS, _free_at,
-    _tw,
+    MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS,
+    _find_cluster, _free_at, _tw,
 )
 
 
@@ -251,6 +251,22 @@ def _step(S, h):
         if not (np.isfinite(S.X[p]) and np.isfinite(S.V[p])):
             return np.inf
     return err
+
+
+@kernel
+def _step_pair(S, h, j):
+    """A DOP853 step of h at contact j's two balls alone (those of them in the window):
+    their X, V and A at its end, the numbers ``_step`` gives them, for the cost of a
+    few dozen balls (``_step_band``). The rest of the window holds no step's values:
+    a step that is kept is taken whole."""
+    S.ints[I_DENSE] = 0
+    S.ints[I_DSTAMP] += 1
+    p = S.bmap[j]
+    q = S.bmap[j + 1]
+    if p >= 0:
+        _step_band(S, h, p)
+    if q >= 0 and (p < 0 or _find_cluster(S, j + 1) != _find_cluster(S, j)):
+        _step_band(S, h, q)
 
 
 @kernel(inline="always")

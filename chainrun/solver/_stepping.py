@@ -21,7 +21,7 @@ from chainrun.solver._state import (
     I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY, I_XEND, PT, SERIES_CLUSTERS,
     ST_NON_FINITE, ST_STEP_UNDERFLOW, _free_at,
 )
-from chainrun.solver._steppers import _step, _taylor, _taylor_error
+from chainrun.solver._steppers import _step, _step_pair, _taylor, _taylor_error
 
 
 @kernel(inline="always")
@@ -156,14 +156,27 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     """Redo the step of h to end on the event found at th h (contact j's kind at level
     lev), refined by Newton on the step itself. Returns GO_ON landed (the event waits
     in I_EVJ, I_EVK), AGAIN where the step is to be tried again shorter (the state
-    restored to its start), or ST_STEP_UNDERFLOW."""
+    restored to its start), or ST_STEP_UNDERFLOW.
+
+    Newton's first iterate is the whole window's step, with its error test; a DOP853
+    step's later iterates are taken at the event's two balls alone (``_step_pair``,
+    the same numbers there), and the step it lands on is then taken whole, with its
+    error test: a damped contact's unload takes four iterates on average, each of
+    which stepped every ball of the window."""
     hev = th * h
     landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
     nit = 0
+    whole = True  # whether the last step taken was the whole window's
     while landing == 0:
-        if not (_step(S, hev) <= 1.0):
-            landing = 2
-            break
+        if tay or nit == 0:
+            if not (_step(S, hev) <= 1.0):
+                landing = 2
+                break
+        else:
+            # Newton's later iterates need the event's two balls alone; the step
+            # that is kept is taken whole below
+            _step_pair(S, hev, j)
+            whole = False
         xl, vl, al = _end_ball(S, j, t + hev)
         xr, vr, ar = _end_ball(S, j + 1, t + hev)
         if kind == EV_UNLOAD or kind == EV_RELOAD:
@@ -178,9 +191,11 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
         dh = -res / w
         nit += 1
         if abs(dh) > 0.5 * hev or nit == 6:
-            landing = 3  # the state stays that of the last step taken
+            landing = 3  # the step stays the last one taken (at this hev)
             break
         hev += dh
+    if landing != 2 and not whole and not (_step(S, hev) <= 1.0):
+        landing = 2
     if landing == 2:
         # the shorter step failed its error test: halve it and look again
         # (a series step too: capped, or it would take the same step again)

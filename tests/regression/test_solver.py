@@ -322,9 +322,13 @@ def test_steps_over_an_event_land_on_it():
 
 
 def _stopped_state(n, k, alpha, t_end):
+    return _stopped_line_state(Line.paper(n, k, alpha), t_end)
+
+
+def _stopped_line_state(line, t_end):
     from chainrun.solver import _loop, _setup, _state
 
-    S = _setup._new_state(n, k, alpha, 1e-12, t_end, None)
+    S = _setup._line_state(_setup._Prepared(line), 1e-12, t_end, None)
     while True:
         status = _loop.advance(S)
         if status == _state.ST_FLUSH:
@@ -355,6 +359,51 @@ def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
     twin(_steppers._dense)(S)
     np.testing.assert_array_equal(S.FX[:, :m], by_ball[0])
     np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
+
+
+@pytest.mark.slow  # the Python twins of the step kernels compile first (~20 s)
+@pytest.mark.parametrize(("line", "t_end"), [
+    (Line.paper(80, 20, 1.5), 90.0),  # 4 clusters
+    (Line.make(60, mass=np.random.default_rng(1).uniform(1.0, 10.0, 60),
+               stiffness=np.random.default_rng(2).uniform(1.0, 10.0, 59),
+               damping=0.3, damping_exponent=0.25), 60.0),  # damped, 6 clusters
+    (Line.make(50, mass=np.linspace(1.0, 4.0, 50), stiffness=np.linspace(3.0, 1.0, 49),
+               alpha=1.0, damping=0.2, k=2), 15.0),  # a dashpot on linear contacts, 3
+])
+def test_a_step_at_two_balls_is_the_whole_windows(line, t_end):
+    """Newton's later iterates on an event step only the event's two balls, on bands of
+    balls cut at their clusters' ends: the same numbers there as the whole window's
+    step, for every contact of the window, inside a cluster, at its ends and between
+    two clusters."""
+    from chainrun.solver import _state, _steppers
+
+    S = _stopped_line_state(line, t_end)
+    m = int(S.ints[_state.I_M])
+    assert m > 0 and S.ints[_state.I_NCL] >= 2
+    # a step of the window from where the run stopped, by DOP853
+    for a, b in ((S.X0, S.X), (S.V0, S.V), (S.A0, S.A)):
+        a[:m] = b[:m]
+    S.fs[_state.F_TPREV] = S.fs[_state.F_T]
+    S.ints[_state.I_TAY] = 0
+    h = 0.2
+    twin(_steppers._step)(S, h)
+    whole = S.X[:m].copy(), S.V[:m].copy(), S.A[:m].copy()
+    pair = twin(_steppers._step_pair)
+    checked = 0
+    for j in range(line.n - 1):
+        balls = [int(S.bmap[b]) for b in (j, j + 1) if S.bmap[b] >= 0]
+        if not balls:
+            continue
+        # (and the stages, the forces: a value the pair's step does not compute
+        # shows)
+        for a in (S.X, S.V, S.A, S.FS, *S.KV):
+            a[:m] = np.nan
+        pair(S, h, j)
+        for p in balls:
+            got = S.X[p], S.V[p], S.A[p]
+            assert got == tuple(w[p] for w in whole), f"contact {j}, compact ball {p}"
+        checked += 1
+    assert checked >= m - 1
 
 
 def _window_rhs(S, alpha):
