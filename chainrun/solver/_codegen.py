@@ -109,18 +109,28 @@ def _stage_pass(out_x: str, s: int, node: float, coefs, vcoefs, weight: float = 
     ]
 
 
-def _band_pass(s: int, reach: int, node: float, coefs, vcoefs, out: str = "Xs") -> list[str]:
+def _band_pass(s: int, reach: int, node: float, coefs, vcoefs, out: str = "Xs",
+               end: bool = False) -> list[str]:
     """Stage s on the balls within ``reach`` of p (positions into ``out``, and on a damped
-    line velocities) and within ``reach - 1`` (accelerations), inside p's cluster o..e."""
+    line velocities) and within ``reach - 1`` (accelerations), inside p's cluster o..e.
+    With ``end``, the step's end: its velocities into V on every line, and its
+    accelerations into A as well."""
+    if end:
+        vel = ["    for q in range(lo, hi + 1):",
+               f"        V[q] = V0[q] + {_combo(vcoefs, 'KV', 'h', 'q')}",
+               "    if damped:",
+               f"        _damped_band({out}, V, F, MK, WP, lo, hi, mode, alpha)"]
+    else:
+        vel = ["    if damped:",
+               "        for q in range(lo, hi + 1):",
+               f"            VS[q] = V0[q] + {_combo(vcoefs, 'KV', 'h', 'q')}",
+               f"        _damped_band({out}, VS, F, MK, WP, lo, hi, mode, alpha)"]
     return [
         f"    lo = max(o, p - {reach})",
         f"    hi = min(e, p + {reach})",
         "    for q in range(lo, hi + 1):",
         f"        {out}[q] = X0[q] + h * ({_drift(node, coefs, 'q')})",
-        "    if damped:",
-        "        for q in range(lo, hi + 1):",
-        f"            VS[q] = V0[q] + {_combo(vcoefs, 'KV', 'h', 'q')}",
-        f"        _damped_band({out}, VS, F, MK, WP, lo, hi, mode, alpha)",
+        *vel,
         "    else:",
         f"        _forces({out}, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
         "    qa = lo if lo == o else lo + 1",
@@ -130,6 +140,24 @@ def _band_pass(s: int, reach: int, node: float, coefs, vcoefs, out: str = "Xs") 
         " * WP[W_IM, q] + WP[W_ACC, q]",
         "    if driven:",
         f"        _drive_band(S, KV[{s}], t0 + {float(node)!r} * h, qa, qb)",
+        *(["    for q in range(qa, qb + 1):",
+           f"        A[q] = KV[{s}, q]"] if end else []),
+    ]
+
+
+def _band_prologue(arrays: str) -> list[str]:
+    """What a band's stages read, and p's cluster o..e."""
+    return [
+        "    mode = S.ints[I_MODE]",
+        "    alpha = S.fs[F_ALPHA]",
+        "    damped = S.ints[I_DAMPED] == 1",
+        f"    {arrays}",
+        "    VS = S.KV[KV_VS]",
+        "    driven = S.ints[I_DRIVEN] == 1",
+        "    t0 = S.fs[F_TPREV]",
+        "    c = _find_cluster(S, S.cb[p])",
+        "    o = S.coff[c]",
+        "    e = o + S.chi[c] - S.clo[c]",
     ]
 
 
@@ -550,17 +578,8 @@ def generate() -> str:
         "    forces stop. Each ball's stages are those the whole window's give",
         "    (_dense_stages): the same operations.",
         '    """',
-        "    mode = S.ints[I_MODE]",
-        "    alpha = S.fs[F_ALPHA]",
         "    h = S.fs[F_HLAST]",
-        "    damped = S.ints[I_DAMPED] == 1",
-        "    KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP",
-        "    VS = S.KV[KV_VS]",
-        "    driven = S.ints[I_DRIVEN] == 1",
-        "    t0 = S.fs[F_TPREV]",
-        "    c = _find_cluster(S, S.cb[p])",
-        "    o = S.coff[c]",
-        "    e = o + S.chi[c] - S.clo[c]",
+        *_band_prologue("KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP"),
     ]
     for s in range(ns + 1, nse):
         lines += _band_pass(s, nse - s, C[s], AA[s, :s], A[s, :s])
@@ -581,41 +600,14 @@ def generate() -> str:
         "    power and the error estimate are not taken: a step that is kept is taken whole",
         "    (``_steppers._step``).",
         '    """',
-        "    mode = S.ints[I_MODE]",
-        "    alpha = S.fs[F_ALPHA]",
-        "    damped = S.ints[I_DAMPED] == 1",
-        "    KV, X0, V0, X, V, F, MK, WP = S.KV, S.X0, S.V0, S.X, S.V, S.FS, S.TR, S.WP",
-        "    VS = S.KV[KV_VS]",
-        "    driven = S.ints[I_DRIVEN] == 1",
-        "    t0 = S.fs[F_TPREV]",
-        "    c = _find_cluster(S, S.cb[p])",
-        "    o = S.coff[c]",
-        "    e = o + S.chi[c] - S.clo[c]",
+        *_band_prologue("KV, X0, V0, A0, X, V, A = S.KV, S.X0, S.V0, S.A0, S.X, S.V, S.A"),
+        "    F, MK, WP = S.FS, S.TR, S.WP",
         f"    for q in range(max(o, p - {ns + 1}), min(e, p + {ns + 1}) + 1):",
-        "        KV[0, q] = S.A0[q]",
+        "        KV[0, q] = A0[q]",
     ]
     for s in range(1, ns):
         lines += _band_pass(s, ns + 2 - s, C[s], AA[s, :s], A[s, :s], out="X")
-    lines += [
-        "    lo = max(o, p - 2)",
-        "    hi = min(e, p + 2)",
-        "    for q in range(lo, hi + 1):",
-        f"        X[q] = X0[q] + h * (V0[q] + {_combo(AA[ns, :ns], 'KV', 'h', 'q')})",
-        f"        V[q] = V0[q] + {_combo(B, 'KV', 'h', 'q')}",
-        "    if damped:",
-        "        _damped_band(X, V, F, MK, WP, lo, hi, mode, alpha)",
-        "    else:",
-        "        _forces(X, F, MK, WP[W_ALPHA], lo, hi, mode, alpha)",
-        "    qa = lo if lo == o else lo + 1",
-        "    qb = hi if hi == e else hi - 1",
-        "    for q in range(qa, qb + 1):",
-        f"        KV[{ns}, q] = ((F[q - 1] if q > o else 0.0) - (F[q] if q < e else 0.0))"
-        " * WP[W_IM, q] + WP[W_ACC, q]",
-        "    if driven:",
-        f"        _drive_band(S, KV[{ns}], t0 + 1.0 * h, qa, qb)",
-        "    for q in range(qa, qb + 1):",
-        f"        S.A[q] = KV[{ns}, q]",
-    ]
+    lines += _band_pass(ns, 2, 1.0, AA[ns, :ns], B, out="X", end=True)
     dx = _nystrom(dop.D)
     lines += [
         "",

@@ -341,9 +341,9 @@ def _dense_ball(S, p):
     forces stop. Each ball's stages are those the whole window's give
     (_dense_stages): the same operations.
     """
+    h = S.fs[F_HLAST]
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
-    h = S.fs[F_HLAST]
     damped = S.ints[I_DAMPED] == 1
     KV, X0, V0, Xs, F, MK, WP = S.KV, S.X0, S.V0, S.XS, S.FS, S.TR, S.WP
     VS = S.KV[KV_VS]
@@ -419,15 +419,16 @@ def _step_band(S, h, p):
     mode = S.ints[I_MODE]
     alpha = S.fs[F_ALPHA]
     damped = S.ints[I_DAMPED] == 1
-    KV, X0, V0, X, V, F, MK, WP = S.KV, S.X0, S.V0, S.X, S.V, S.FS, S.TR, S.WP
+    KV, X0, V0, A0, X, V, A = S.KV, S.X0, S.V0, S.A0, S.X, S.V, S.A
     VS = S.KV[KV_VS]
     driven = S.ints[I_DRIVEN] == 1
     t0 = S.fs[F_TPREV]
     c = _find_cluster(S, S.cb[p])
     o = S.coff[c]
     e = o + S.chi[c] - S.clo[c]
+    F, MK, WP = S.FS, S.TR, S.WP
     for q in range(max(o, p - 13), min(e, p + 13) + 1):
-        KV[0, q] = S.A0[q]
+        KV[0, q] = A0[q]
     lo = max(o, p - 13)
     hi = min(e, p + 13)
     for q in range(lo, hi + 1):
@@ -607,7 +608,8 @@ def _step_band(S, h, p):
     lo = max(o, p - 2)
     hi = min(e, p + 2)
     for q in range(lo, hi + 1):
-        X[q] = X0[q] + h * (V0[q] + h * (0.05429373411656877 * KV[0, q] + 2.96687526183494 * KV[5, q] + 1.4186384244858756 * KV[6, q] + -4.016218126161175 * KV[7, q] + 0.10850859975965002 * KV[8, q] + -0.06086437986500647 * KV[9, q] + 0.028766485829147193 * KV[10, q]))
+        X[q] = X0[q] + h * (1.0 * V0[q] + h * (0.05429373411656877 * KV[0, q] + 2.96687526183494 * KV[5, q] + 1.4186384244858756 * KV[6, q] + -4.016218126161175 * KV[7, q] + 0.10850859975965002 * KV[8, q] + -0.06086437986500647 * KV[9, q] + 0.028766485829147193 * KV[10, q]))
+    for q in range(lo, hi + 1):
         V[q] = V0[q] + h * (0.054293734116568765 * KV[0, q] + 4.450312892752409 * KV[5, q] + 1.8915178993145003 * KV[6, q] + -5.801203960010585 * KV[7, q] + 0.3111643669578199 * KV[8, q] + -0.1521609496625161 * KV[9, q] + 0.20136540080403034 * KV[10, q] + 0.04471061572777259 * KV[11, q])
     if damped:
         _damped_band(X, V, F, MK, WP, lo, hi, mode, alpha)
@@ -620,7 +622,7 @@ def _step_band(S, h, p):
     if driven:
         _drive_band(S, KV[12], t0 + 1.0 * h, qa, qb)
     for q in range(qa, qb + 1):
-        S.A[q] = KV[12, q]
+        A[q] = KV[12, q]
 
 
 @kernel(inline="always")
