@@ -226,16 +226,21 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
     accumulators (even and odd j), so that they stay in registers and the compiler
     packs the lanes into vector instructions: a loop over the lanes would load and
     store its partial sums at every j, and sums written out for every order would be a
-    function of thousands of lines, slow to compile. ``mixed``: each lane has its own
-    exponent (AL), and so its own weights. ``unit``: every mass 1 (no division).
+    function of thousands of lines, slow to compile. Each tile takes its lanes' c_k
+    from the balls' rows of TX (one column past the tile: TX has a column past the
+    last tile's) and stores them in its row k as it uses them: written by a pass of
+    scalar stores, that row would be read back as vectors, which wait until the stores
+    are done. A lane past the window takes the difference of columns no ball holds;
+    its force terms (f_0 = 0, 1/c_0 = 0) are read by nothing. ``mixed``: each lane has
+    its own exponent (AL), and so its own weights. ``unit``: every mass 1 (no division).
     """
     lanes = range(tile)
     if mixed:
         name, args = "_series_orders_mixed", "TX, W, G, IM, AL, nc, m, unit, DT, DC"
         doc = "Orders 1 and up of the force series, each lane its own alpha (see _taylor)."
-        head = [f"            a{i} = AL[t * SERIES_TILE + {i}]" for i in lanes]
+        head = [f"            a{i} = AL[q + {i}]" for i in lanes]
         head += [f"            b{i} = a{i} + 1.0" for i in lanes]
-        first = [f"            e{i} = a{i} * W[c + {i}] * W[f + {i}]" for i in lanes]
+        first = [f"            e{i} = a{i} * c{i} * W[f + {i}]" for i in lanes]
         weight = ["                jk = J_OVER_K[k, j]"]
 
         def term(acc, i):
@@ -244,7 +249,7 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         name, args = "_series_orders", "TX, W, G, IM, nc, m, alpha, unit, DT, DC"
         doc = "Orders 1 and up of the force series of every contact lane (see _taylor)."
         head = []
-        first = [f"            e{i} = alpha * W[c + {i}] * W[f + {i}]" for i in lanes]
+        first = [f"            e{i} = alpha * c{i} * W[f + {i}]" for i in lanes]
         weight = ["                w = a1 * J_OVER_K[k, j] - 1.0"]
 
         def term(acc, i):
@@ -257,12 +262,14 @@ def _series(pt: int, tile: int, mixed: bool) -> list[str]:
         "    nt = (nc + SERIES_TILE - 1) // SERIES_TILE",
         f"    f0 = {pt + 1}  # row of f_0",
         f"    for k in range(1, {pt - 1}):",
-        "        for p in range(nc):",
-        "            W[_tw(p, k)] = TX[k, p] - TX[k, p + 1]",
         "        for t in range(nt):",
+        "            q = t * SERIES_TILE",
         "            o = t * TILE_STRIDE",
         "            c = o + k * SERIES_TILE",
         "            f = o + f0 * SERIES_TILE",
+        *[f"            x{i} = TX[k, q + {i}]" for i in range(tile + 1)],
+        *[f"            c{i} = x{i} - x{i + 1}" for i in lanes],
+        *[f"            W[c + {i}] = c{i}" for i in lanes],
         *head,
         *first,
         *[f"            d{i} = 0.0" for i in lanes],

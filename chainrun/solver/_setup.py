@@ -154,9 +154,10 @@ def _alloc_window(cap: int) -> dict:
         FS=np.zeros(cap), KV=np.zeros((_state.KV_DS + 1, cap)),
         FX=np.zeros((7, cap)), FV=np.zeros((7, cap)), DM=np.full(cap, -1, np.int64),
         WP=np.zeros((_state.W_HELD + 1, lanes)),
-        # (a column past the lanes: with a power of two of columns, 512 and more, the
-        # rows of TX lie a multiple of 4 KiB apart, and a load from one row waits on
-        # the stores to the next, which the CPU takes for the same place)
+        # (a column past the lanes: the series' tiles read one past their last, and
+        # with a power of two of columns, 512 and more, the rows of TX would lie a
+        # multiple of 4 KiB apart, and a load from one row wait on the stores to the
+        # next, which the CPU takes for the same place)
         TX=np.zeros((_state.PT + 1, lanes + 1)),
         TW=np.zeros(lanes * _state.TILE_ROWS),
         TR=np.zeros(cap),
