@@ -258,7 +258,8 @@ def _step_pair(S, h, j):
     """A DOP853 step of h at contact j's two balls alone (those of them in the window):
     their X, V and A at its end, the numbers ``_step`` gives them, for the cost of a
     few dozen balls (``_step_band``). The rest of the window holds no step's values:
-    a step that is kept is taken whole."""
+    a step that is kept is taken whole. A moving wall ends where its motion has it, as
+    in ``_step``."""
     S.ints[I_DENSE] = 0
     S.ints[I_DSTAMP] += 1
     p = S.bmap[j]
@@ -267,6 +268,8 @@ def _step_pair(S, h, j):
         _step_band(S, h, p)
     if q >= 0 and (p < 0 or _find_cluster(S, j + 1) != _find_cluster(S, j)):
         _step_band(S, h, q)
+    if S.ints[I_DRIVEN] == 1:
+        _drive_ends(S, S.fs[F_TPREV] + h)
 
 
 @kernel(inline="always")

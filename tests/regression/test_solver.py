@@ -18,6 +18,8 @@ import numpy as np
 import pytest
 
 from chainrun.solver import EventKind, Line, Outcome, simulate
+from chainrun.solver.drive import Drive
+from chainrun.solver.model import Wall
 from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
@@ -369,12 +371,15 @@ def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
                damping=0.3, damping_exponent=0.25), 60.0),  # damped, 6 clusters
     (Line.make(50, mass=np.linspace(1.0, 4.0, 50), stiffness=np.linspace(3.0, 1.0, 49),
                alpha=1.0, damping=0.2, k=2), 15.0),  # a dashpot on linear contacts, 3
+    (Line.make(40, k=3, damping=0.2, damping_exponent=0.25,
+               left=Wall(1.0, 1.5, 0.0, motion=Drive.sine(0.01, 0.2)),
+               drives=[(20, Drive.sine(0.05, 0.1))]), 20.0),  # a moving wall, a driven ball
 ])
 def test_a_step_at_two_balls_is_the_whole_windows(line, t_end):
     """Newton's later iterates on an event step only the event's two balls, on bands of
     balls cut at their clusters' ends: the same numbers there as the whole window's
     step, for every contact of the window, inside a cluster, at its ends and between
-    two clusters."""
+    two clusters; a moving wall where its motion has it."""
     from chainrun.solver import _state, _steppers
 
     S = _stopped_line_state(line, t_end)
