@@ -17,9 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from chainrun.solver import EventKind, Line, Outcome, simulate
-from chainrun.solver.drive import Drive
-from chainrun.solver.model import Wall
+from chainrun.solver import Drive, EventKind, Line, Outcome, Wall, simulate
 from chainrun.solver._jit import python_twin as twin
 from chainrun.solver.physics import compressions
 
