@@ -1,6 +1,7 @@
 """What several test files share: running the real ``chainrun simulate`` on a config,
 the paper's Table 1 as printed, building the paper's cheap artefacts, the known solver
-defects, and the driven chain of the transmission tests."""
+defects, the driven chain of the transmission tests, and the damped laws whose kernels
+have loops of their own."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 from click.testing import CliRunner
 
 from chainrun.cli import main
+from chainrun.solver import _state
 
 #: The repository (tests/ is one level below it).
 ROOT = Path(__file__).resolve().parents[1]
@@ -20,6 +22,18 @@ TABLE1 = {
     3: ["-0.1397", "0.1996", "0.7855", "1.042", "1.113"],
     4: ["0.0112", "0.8729", "1.015", "1.030", "1.071"],
 }
+
+#: The damped window passes' cases, (mode, alpha, beta): each named law has a loop of its
+#: own, the others share the general one (beta None: an exponent per lane).
+DAMPED_LOOPS = [
+    (_state.MODE_HERTZ, 1.5, 0.25),    # Tsuji on Hertz: a loop of its own
+    (_state.MODE_HERTZ, 1.5, 0.5),     # Kuwabara-Kono on Hertz: a loop of its own
+    (_state.MODE_LINEAR, 1.0, 0.0),    # a dashpot on linear: a loop of its own
+    (_state.MODE_POWER, 2.0, 0.5),     # another law: the general loop
+    (_state.MODE_HERTZ, 1.5, None),    # exponents that differ: the general loop
+]
+#: Rows of a window's lane parameters (WP).
+WINDOW_ROWS = max(getattr(_state, name) for name in dir(_state) if name.startswith("W_")) + 1
 
 #: The paper's artefacts cheap enough to build in the test suite (no dense snapshots).
 FAST = ("fig01", "fig02", "fig03", "fig04", "fig05", "fig06", "fig07", "sec4", "fig08",

@@ -19,7 +19,7 @@ from chainrun.solver import _state
 from chainrun.solver._forces import _damped_forces
 from chainrun.solver._jit import python_twin as twin
 
-N_ROWS = max(getattr(_state, name) for name in dir(_state) if name.startswith("W_")) + 1
+from helpers import DAMPED_LOOPS, WINDOW_ROWS
 
 
 def _window(rng, m, alpha, beta):
@@ -29,7 +29,7 @@ def _window(rng, m, alpha, beta):
     X[1::7] = X[0::7][: len(X[1::7])]  # some compressions exactly 0
     V = rng.normal(size=m)
     MK = rng.uniform(1.0, 3.0, m)
-    WP = np.zeros((N_ROWS, m))
+    WP = np.zeros((WINDOW_ROWS, m))
     WP[_state.W_ALPHA] = alpha
     WP[_state.W_ETA] = rng.uniform(0.1, 1.0, m) * (rng.uniform(size=m) < 0.8)
     WP[_state.W_BETA] = beta
@@ -61,13 +61,7 @@ def _law(X, V, MK, WP, DS, wgt, alpha):
     return F, ds
 
 
-@pytest.mark.parametrize("mode, alpha, beta", [
-    (_state.MODE_HERTZ, 1.5, 0.25),    # Tsuji on Hertz: a loop of its own
-    (_state.MODE_HERTZ, 1.5, 0.5),     # Kuwabara-Kono on Hertz: a loop of its own
-    (_state.MODE_LINEAR, 1.0, 0.0),    # a dashpot on linear: a loop of its own
-    (_state.MODE_POWER, 2.0, 0.5),     # another law: the general loop
-    (_state.MODE_HERTZ, 1.5, None),    # exponents that differ: the general loop
-])
+@pytest.mark.parametrize("mode, alpha, beta", DAMPED_LOOPS)
 @pytest.mark.parametrize("wgt", [0.0, 0.03])
 def test_the_damped_forces_are_the_law_exactly(mode, alpha, beta, wgt):
     forces = twin(_damped_forces)

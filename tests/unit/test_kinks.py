@@ -22,7 +22,7 @@ from chainrun.solver import _state
 from chainrun.solver._events import _kinks_possible
 from chainrun.solver._jit import python_twin as twin
 
-N_ROWS = max(getattr(_state, name) for name in dir(_state) if name.startswith("W_")) + 1
+from helpers import DAMPED_LOOPS, WINDOW_ROWS
 
 # what the filter reads of the state
 Window = namedtuple("Window", "ints X0 V0 A0 X V A TR WP jbuf")
@@ -60,7 +60,7 @@ def _window(rng, m, alpha, beta, h):
         X = X + V * h + 0.5 * A * h * h
         V = V + A * h + rng.normal(scale=0.05, size=m)
         A = A + rng.normal(scale=10.0, size=m)
-    WP = np.zeros((N_ROWS, m))
+    WP = np.zeros((WINDOW_ROWS, m))
     WP[_state.W_ALPHA] = alpha
     WP[_state.W_ETA] = rng.uniform(0.5, 2.0, m) * (rng.uniform(size=m) < 0.85)
     WP[_state.W_BETA] = beta
@@ -89,13 +89,7 @@ def _may_switch(ends, TR, WP, h):
     return switch, decided | (eta == 0.0)
 
 
-@pytest.mark.parametrize("mode, alpha, beta", [
-    (_state.MODE_HERTZ, 1.5, 0.25),    # Tsuji on Hertz: a loop of its own
-    (_state.MODE_HERTZ, 1.5, 0.5),     # Kuwabara-Kono on Hertz: a loop of its own
-    (_state.MODE_LINEAR, 1.0, 0.0),    # a dashpot on linear: a loop of its own
-    (_state.MODE_POWER, 2.0, 0.5),     # another law: the general loop
-    (_state.MODE_HERTZ, 1.5, None),    # exponents that differ: the general loop
-])
+@pytest.mark.parametrize("mode, alpha, beta", DAMPED_LOOPS)
 def test_every_lane_that_may_switch_is_flagged(mode, alpha, beta):
     kinks = twin(_kinks_possible)
     flagged = kept = 0
