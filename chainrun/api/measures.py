@@ -18,11 +18,14 @@ from chainrun.paths import index_file
 
 # ------------------------------------------------------------------------------ pulses
 def pulses(run) -> "xarray.Dataset":  # noqa: F821
-    """The first pulse at each force sensor of a run, and the wave's speed, as a Dataset.
+    """The first pulse at each force sensor of a run, and the wave's speed, as a Dataset;
+    over a sweep or an ensemble, each run's, along a dimension ``run``.
 
     ``chainrun.analysis.pulse`` measures them; its module's docstring defines each
     number. The run is a Dataset from ``open_run`` or ``simulate``, a run file's path,
-    or a ``chainrun.store.RunData``.
+    or a ``chainrun.store.RunData``; a sweep is a Dataset from ``open_sweep`` (or one
+    run of it, ``.isel(run=i)``), the DataTree ``simulate`` returns for one, or an
+    output folder's path.
 
     Returns
     -------
@@ -38,13 +41,16 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
         sensors saw waves going both ways (a line struck from both ends), those are
         the wave towards ball N's, and ``backward_wave_speed`` (``_error``, ``_si``,
         ``_si_error``) the other's, each fitted alone. Every variable has ``units``
-        and ``long_name``; NaN where a pulse was not reached or was cut off.
+        and ``long_name``; NaN where a pulse was not reached or was cut off. For a
+        sweep, every variable has the dimension ``run`` first, with the sweep's
+        coordinates along it (its run ids, the swept keys), so that an ensemble's mean
+        peak force is ``p.peak_force.mean("run")``.
 
     Raises
     ------
     chainrun.errors.ChainrunError
-        For a run without force sensors; ``chainrun.errors.StoreError`` for a file
-        that is not a readable run file.
+        For a run without force sensors (naming the run, in a sweep);
+        ``chainrun.errors.StoreError`` for a file or folder that cannot be read.
 
     Examples
     --------
@@ -54,28 +60,70 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     >>> p = chainrun.pulses(ds)                                       # doctest: +SKIP
     >>> p.peak_force.sel(sensor=40).item(), p.wave_speed.item()       # doctest: +SKIP
     (0.63955..., 0.84050...)
+    >>> e = chainrun.pulses("results/ensemble")                       # doctest: +SKIP
+    >>> e.wave_speed_si.mean("run").item(), e.wave_speed_si.std("run").item()  # doctest: +SKIP
     """
-    import numpy as np
     import xarray as xr
 
-    from chainrun.analysis.pulse import measure_pulses, measure_sensors
+    from chainrun.api.runs import open_sweep
+    from chainrun.analysis.pulse import measure_pulses
+
+    if isinstance(run, xr.DataTree):       # simulate's sweep: a child per run
+        names = list(run.children)
+        return _pulses_along_run([_run_pulses(run[name].to_dataset(), name)
+                                  for name in names], xr.Dataset(coords={"run": names}))
+    if isinstance(run, xr.Dataset):
+        if "run" not in run.dims:
+            return _run_pulses(run)
+        ids = [str(r) for r in run["run"].values]
+        return _pulses_along_run([_run_pulses(run.isel(run=i), ids[i])
+                                  for i in range(len(ids))], run)
+    path = Path(run) if isinstance(run, (str, Path)) else None
+    if path is not None and path.is_dir():
+        return pulses(open_sweep(path))
+    return _as_dataset(measure_pulses(run))
+
+
+def _run_pulses(run, name: str | None = None):
+    """``pulses`` of one run's Dataset; in a sweep, ``name`` is its run id."""
+    import numpy as np
+
+    from chainrun.analysis.pulse import measure_sensors
     from chainrun.errors import ChainrunError
+
+    if "sensor_force" not in run:
+        where = f"pulses: run {name}" if name is not None else "pulses"
+        raise ChainrunError(f"{where}: no force sensors in this run; give "
+                            "output.sensors and output.sensor_dt to record them")
+    # a run of a sweep has the sweep's samples: NaN where it took none (a run that
+    # ended sooner than another, or one sampled at other times)
+    run = run.dropna("sample", how="all", subset=["sensor_force"])
+    return _as_dataset(measure_sensors(
+        run["sample"].values, run["sensor_force"].transpose("sample", "sensor", "side").values,
+        run["sensor"].values, units="si" if run.attrs.get("units") == "SI" else "paper",
+        diameter=run["diameter"].values if "diameter" in run else None,
+        gap=run["gap"].values if "gap" in run else None,
+        wall_gap=tuple(np.nan_to_num(run["wall_gap"].values)) if "wall_gap" in run
+        else (0.0, 0.0),
+        min_rise=1e-9 * float(run.attrs.get("scales_force", 1.0))))
+
+
+def _pulses_along_run(measured, sweep):
+    """Each run's ``pulses`` side by side along ``run``, with the sweep's coordinates
+    along it (a variable some runs lack, the backward wave's, NaN in the others)."""
+    import xarray as xr
+
+    out = xr.concat(measured, dim="run", join="outer", combine_attrs="drop_conflicts")
+    along = {name: coord for name, coord in sweep.coords.items() if coord.dims == ("run",)}
+    return out.assign_coords(along)
+
+
+def _as_dataset(p):
+    """A ``chainrun.analysis.pulse`` measurement as ``pulses``' Dataset."""
+    import xarray as xr
+
     from chainrun.units import UNITS
 
-    if isinstance(run, xr.Dataset):
-        if "sensor_force" not in run:
-            raise ChainrunError("pulses: no force sensors in this run; give "
-                                "output.sensors and output.sensor_dt to record them")
-        p = measure_sensors(
-            run["sample"].values, run["sensor_force"].transpose("sample", "sensor", "side").values,
-            run["sensor"].values, units="si" if run.attrs.get("units") == "SI" else "paper",
-            diameter=run["diameter"].values if "diameter" in run else None,
-            gap=run["gap"].values if "gap" in run else None,
-            wall_gap=tuple(np.nan_to_num(run["wall_gap"].values)) if "wall_gap" in run
-            else (0.0, 0.0),
-            min_rise=1e-9 * float(run.attrs.get("scales_force", 1.0)))
-    else:
-        p = measure_pulses(run)
     si = p.units == "si"
 
     def unit(quantity: str) -> str:

@@ -37,6 +37,7 @@ from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
 from chainrun.solver import DEFAULT_RTOL
 from chainrun.solver import restitution as collision
+from chainrun.solver.result import last_sample
 
 #: The units an experiment may be written in: the paper's (every coefficient 1), or SI.
 UNITS = ("paper", "si")
@@ -506,7 +507,7 @@ def sensor_count(sensors: tuple[int, ...], dt: float | None, end: float | None) 
     """Force samples of ``sensors`` every ``dt`` from 0 to ``end``: times by balls."""
     if not sensors or dt is None or end is None:
         return 0
-    return (math.floor(end / dt) + 1) * len(sensors)
+    return (last_sample(dt, end)[0] + 1) * len(sensors)
 
 
 def sensor_end(output: "Output", t_end: float | None) -> float | None:

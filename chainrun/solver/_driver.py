@@ -18,6 +18,8 @@ from chainrun.solver.result import (
     Diagnostics,
     Outcome,
     Solution,
+    last_sample,
+    sample_times,
     velocity_floor,
 )
 from chainrun.solver import _jit, _loop, _state
@@ -93,13 +95,18 @@ _SAMPLE_ROWS = 1024
 
 class _Sensors:
     """The samples of the sensor balls' neighbourhoods: internal positions (and
-    velocities, for a damped law) of balls b-1, b, b+1 (a wall's included) at t = 0,
-    dt, 2 dt, ... up to ``end`` (in the units of the scales), turned into the contact
-    forces on each side of b. Kept in arrays, a row per sample."""
+    velocities, for a damped law) of balls b-1, b, b+1 (a wall's included) at the
+    times ``sample_times(dt, end)`` (``dt`` and ``end`` in the line's units, divided by
+    ``tscale`` for the kernels), turned into the contact forces on each side of b. Kept
+    in arrays, a row per sample."""
 
-    def __init__(self, balls, dt, end, P: _Prepared):
-        self.balls, self.dt, self.P = balls, dt, P
+    def __init__(self, balls, dt, end, tscale, P: _Prepared):
+        self.balls, self.dt, self.tscale, self.P = balls, dt, tscale, P
         self.end = math.inf if end is None else end
+        if balls.size and math.isfinite(self.end):
+            self.last, self.whole = last_sample(dt, self.end)
+        else:
+            self.last, self.whole = math.inf, False
         inner = balls - 1 + P.lw  # internal indices
         near = np.concatenate([inner - 1, inner, inner + 1])
         self.probe = np.unique(near[(near >= 0) & (near < P.nb)]).astype(np.int64)
@@ -109,10 +116,14 @@ class _Sensors:
         self.count = 0
 
     def next_time(self):
-        t = self.count * self.dt if self.balls.size else math.inf
-        return t if t <= self.end else math.inf
+        """The next sample's time in the kernels' units, inf if there is none."""
+        k = self.count
+        if not self.balls.size or k > self.last:
+            return math.inf
+        t = self.end if (k == self.last and self.whole) else k * self.dt
+        return t / self.tscale
 
-    def take(self, t, positions, velocities):
+    def take(self, positions, velocities):
         if self.count == self.rows.shape[0]:
             self.rows = np.concatenate([self.rows, np.empty_like(self.rows)])
             self.vrows = np.concatenate([self.vrows, np.empty_like(self.vrows)])
@@ -132,7 +143,8 @@ class _Sensors:
                                    beta=P.beta[a]) if P.damped else {}
                     out[:, s, side] = contact_law(y[:, where[a]] - y[:, where[b]],
                                                   P.kappa[a], P.alpha[a], **damping)
-        return self.dt * np.arange(self.count) * P.scales.time, out * P.scales.force
+        dt = 1.0 if self.dt is None else self.dt
+        return sample_times(dt, self.end, self.count), out * P.scales.force
 
 
 def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
@@ -187,8 +199,7 @@ def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
         ev_k.append(S.ev_k[:m].copy())
         S.ints[_state.I_NEV] = 0
 
-    sensing = _Sensors(sensor_balls, None if sensor_dt is None else sensor_dt / tscale,
-                       None if sensor_end is None else sensor_end / tscale, P)
+    sensing = _Sensors(sensor_balls, sensor_dt, sensor_end, tscale, P)
     S = S._replace(probe=sensing.probe)
     nout = 0
 
@@ -218,10 +229,10 @@ def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
                 nout += 1
             if tout == sensing.next_time():
                 if kind == 1:
-                    sensing.take(tout, S.ox[sensing.probe], S.ov[sensing.probe])
+                    sensing.take(S.ox[sensing.probe], S.ov[sensing.probe])
                 else:
                     _evaluate(S, _state.TASK_SAMPLE, tout)
-                    sensing.take(tout, S.ox[:S.probe.size], S.ov[:S.probe.size])
+                    sensing.take(S.ox[:S.probe.size], S.ov[:S.probe.size])
             request()
             if on_progress is not None:
                 on_progress(float(S.fs[_state.F_T]) * tscale)
@@ -250,7 +261,7 @@ def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
     # samples up to the end of the run (its last instant included)
     while sensing.next_time() <= t_final:
         _evaluate(S, _state.TASK_SAMPLE, sensing.next_time())
-        sensing.take(sensing.next_time(), S.ox[:S.probe.size], S.ov[:S.probe.size])
+        sensing.take(S.ox[:S.probe.size], S.ov[:S.probe.size])
     sensor_time, sensor_force = sensing.forces()
     _evaluate(S, _state.TASK_SNAPSHOT, t_final)
     y_final = S.ox.copy()

@@ -8,6 +8,7 @@ package: no kernel and no formula of a line lives here.
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -17,6 +18,37 @@ from chainrun.solver.model import Line
 
 #: Default relative accuracy of a step (velocities are of order 1 in paper units).
 DEFAULT_RTOL = 1e-12
+#: An end within this fraction of a sample interval of a whole number of them is that
+#: number (5 ms every 5 us: 0.005 / 5e-6 is 999.9999999999999 in floating point)
+_WHOLE_SAMPLES = 1e-9
+
+
+def last_sample(dt: float, end: float) -> tuple[int, bool]:
+    """The index of the last force sample at or before ``end`` on the grid 0, dt, 2 dt,
+    ..., and whether ``end`` is that sample (a whole number of ``dt`` up to rounding)."""
+    ratio = end / dt
+    whole = round(ratio)
+    if abs(ratio - whole) <= _WHOLE_SAMPLES * max(1.0, ratio):
+        return int(whole), True
+    return math.floor(ratio), False
+
+
+def sample_times(dt: float, end: float, count: int | None = None) -> np.ndarray:
+    """The force sensors' sample times: k dt for k = 0, 1, ... up to ``end``
+    (``last_sample``), or the first ``count`` of them.
+
+    In the units of ``dt``, computed there (never through a line's scales): every run
+    with the same ``dt`` has the same times to the last bit, whatever its line, so that
+    the runs of a sweep share one time axis. Where ``end`` is a whole number of ``dt``
+    up to rounding, the last sample is at ``end`` itself: 5 ms every 5 us is 1001
+    samples, the last at 0.005.
+    """
+    last, whole = last_sample(dt, end) if math.isfinite(end) else (math.inf, False)
+    n = last + 1 if count is None else count
+    times = dt * np.arange(n, dtype=np.float64)
+    if whole and n == last + 1:
+        times[-1] = end
+    return times
 
 
 class EventKind(enum.IntEnum):

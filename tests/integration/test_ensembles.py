@@ -139,3 +139,42 @@ def test_a_damped_ensemble_draws_the_energy_it_keeps(tmp_path):
     (energy,) = [a for a in figure.axes[1].get_lines() if a.get_gid() == "energy/mean"]
     np.testing.assert_allclose(energy.get_ydata(), 100 * left.mean(axis=0), rtol=1e-12)
     assert energy.get_ydata()[0] == pytest.approx(100.0) and energy.get_ydata()[-1] < 90
+
+
+def test_pulses_of_an_ensemble_are_each_runs_along_run(tmp_path):
+    """An ensemble of SI lines (the beads' diameters drawn by seed, each its own time
+    scale, the runs ending at different times) read as one Dataset: its runs share one
+    sample axis, and ``pulses`` measures each run as from its own file, along ``run``,
+    whether given the sweep, one run of it, or the folder."""
+    out = simulate_text(tmp_path, """name = "beads"
+units = "si"
+[chain]
+n = 16
+k = 1
+speed = 0.5
+diameter = {random = "uniform", low = 0.015, high = 0.025, seed = 1}
+material = "steel"
+restitution = 0.95
+damping_law = "tsuji"
+[output]
+times = {start = 0, stop = 1e-3, step = 1e-5}
+sensors = [5, 10, 15]
+sensor_dt = 5e-7
+[sweep]
+"chain.diameter.seed" = [1, 2, 3]
+""")
+    ds = chainrun.open_sweep(out)
+    assert ds.sizes["sample"] == 2001 and not ds.sensor_force.isnull().any()
+    measured = chainrun.pulses(ds)
+    assert measured.peak_force.dims == ("run", "sensor")
+    assert list(measured["chain.diameter.seed"].values) == [1, 2, 3]
+    for r, seed in enumerate([1, 2, 3]):
+        alone = chainrun.pulses(out / f"diameter_seed={seed}.h5")
+        for name in ("peak_force", "arrival_time", "width", "wave_speed_si"):
+            np.testing.assert_array_equal(measured[name].isel(run=r).values,
+                                          alone[name].values)
+        np.testing.assert_array_equal(chainrun.pulses(ds.isel(run=r)).wave_speed_si,
+                                      alone.wave_speed_si)
+    assert np.all(np.isfinite(measured.wave_speed_si.values))
+    assert measured.wave_speed_si.attrs["units"] == "m/s"
+    np.testing.assert_array_equal(chainrun.pulses(out).peak_force, measured.peak_force)

@@ -126,10 +126,10 @@ def test_force_samples_are_counted_at_the_solvers_own_bytes():
     from chainrun.solver import Line, _driver, _setup
 
     P = _setup._Prepared(Line.make(20, k=1, alpha=1.5))
-    sensors = _driver._Sensors(np.array([5, 12]), 0.1, None, P)
+    sensors = _driver._Sensors(np.array([5, 12]), 0.1, None, 1.0, P)
     taken = 3000
     for i in range(taken):
-        sensors.take(0.1 * i, np.zeros(sensors.probe.size), np.zeros(sensors.probe.size))
+        sensors.take(np.zeros(sensors.probe.size), np.zeros(sensors.probe.size))
     held = sensors.rows.nbytes + sensors.vrows.nbytes
     written = sensors.forces()[1].nbytes * 3 // 2  # forces, and their mean
     assert (held + written) / (taken * 2) <= limits.BYTES_PER_SAMPLE

@@ -11,6 +11,7 @@ from chainrun.analysis import derived
 from chainrun.config import parse_experiment
 from chainrun.errors import ConfigError
 from chainrun.solver import Line, simulate
+from chainrun.solver.result import last_sample, sample_times
 from chainrun.solver.physics import line_contact_forces
 from chainrun.store import read_run
 
@@ -114,6 +115,56 @@ def test_sensors_stop_where_the_file_says_and_are_counted_before_the_run():
     sol = simulate(Line.paper(5, 1, 1.5), sensors=[2], sensor_dt=0.1, sensor_end=1.55)
     np.testing.assert_allclose(sol.sensor_time, 0.1 * np.arange(16))
     assert sol.end_time > 3.0  # the run goes on; its sensors stopped
+
+
+@pytest.mark.parametrize(("dt", "end", "last", "whole"), [
+    (5e-6, 5e-3, 1000, True),     # 0.005 / 5e-6 is 999.9999999999999 in floating point
+    (0.1, 0.3, 3, True),          # 0.3 / 0.1 is 2.9999999999999996
+    (0.1, 1.55, 15, False),
+    (2e-7, 1.5e-3, 7500, True),
+    (0.25, 1.0, 4, True),
+])
+def test_the_last_sample_is_the_end_where_the_end_is_a_whole_number_of_intervals(
+        dt, end, last, whole):
+    assert last_sample(dt, end) == (last, whole)
+    times = sample_times(dt, end)
+    assert times.size == last + 1 and times[0] == 0.0
+    assert times[-1] == (end if whole else last * dt)
+    np.testing.assert_array_equal(times[:-1], dt * np.arange(last))
+
+
+def test_every_run_of_a_sweep_samples_at_the_same_times(tmp_path):
+    """The sample times are k dt in the file's units, whatever the line's scales: the
+    runs of a sweep over the beads' size (each its own time scale) share them to the
+    bit, and a run to t_end = 5 ms sampled every 5 us has 1001 samples, the last at
+    5 ms."""
+    out = simulate_text(tmp_path, """name = "sizes"
+units = "si"
+[chain]
+n = 12
+k = 1
+speed = 0.5
+diameter = 0.01
+material = "steel"
+[walls.right]
+material = "steel"
+[output]
+sensors = [4, 9]
+sensor_dt = 5e-6
+[solver]
+t_end = 5e-3
+[sweep]
+"chain.diameter" = [0.01, 0.0127, 0.019, 0.0254]
+""")
+    runs = [read_run(path) for path in sorted(out.glob("diameter=*.h5"))]
+    assert len(runs) == 4
+    want = 5e-6 * np.arange(1001)
+    want[-1] = 5e-3
+    for run in runs:
+        np.testing.assert_array_equal(run.sensor_time, want)
+    ds = chainrun.open_sweep(out)
+    assert ds.sizes["sample"] == 1001
+    assert not ds.sensor_force.isnull().any()
 
 
 @pytest.mark.parametrize("output, expected", [
