@@ -110,8 +110,9 @@ def _pulse_lines(p) -> list[str]:
             value = f"{scaled(v):.6g} {scaled.unit}"
             error = (f" +- {scaled(speed.error):.2g} {scaled.unit}"
                      if np.isfinite(speed.error) else "")
-        else:
-            value, error = f"{v:.6g} balls per unit time", (
+        else:  # (a line without diameters: its speed in balls per unit of its time)
+            per = "balls/s" if p.units == "si" else "balls per unit time"
+            value, error = f"{v:.6g} {per}", (
                 f" +- {speed.error:.2g}" if np.isfinite(speed.error) else "")
         lines.append("wave speed " + (f"{way} " if p.backward_speed.points else "")
                      + f"{value}{error} (a fit through {speed.points} sensors' peak times"

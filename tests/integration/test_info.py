@@ -213,7 +213,18 @@ def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     for line in lines:
         newtons = float(re.search(r"peak contact force ([\d.]+) N", line).group(1))
         assert newtons == pytest.approx(0.63955 * force, rel=2e-4)
-    assert re.search(r"wave speed [\d.]+ m/s \(a fit through 2 sensors", out_text)
+    speed = float(re.search(r"wave speed ([\d.]+) m/s \(a fit through 2 sensors",
+                            out_text).group(1))
+    # the same line given by its masses and stiffness, without diameters: the same
+    # wave, its speed in balls per second (the spacing of the beads is their diameter)
+    config.write_text(f'name = "sol"\nunits = "si"\n[chain]\nn = 40\nk = 1\nspeed = 0.5\n'
+                      f'mass = {m!r}\nstiffness = {k!r}\nalpha = 1.5\n[output]\n'
+                      'sensors = [15, 25]\nsensor_dt = 2.0e-7\n[solver]\nt_end = 1.2e-3\n')
+    out = tmp_path / "by-mass"
+    assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+    per_second = float(re.search(r"wave speed ([\d.]+) balls/s \(a fit through 2 sensors",
+                                 info(out / "run.h5").stdout).group(1))
+    assert per_second * d == pytest.approx(speed, rel=1e-5)
 
 
 def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
