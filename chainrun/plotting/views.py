@@ -357,6 +357,12 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
     keys = sorted({key for run in runs for key in _overrides(run)})
     if not keys:
         raise ChainrunError("not a sweep: its runs have no swept keys")
+    for ball in balls:
+        if all(_ball_index(ball, run.n) is None for run in runs):
+            sizes = sorted({run.n for run in runs})
+            n = f"N = {sizes[0]}" if len(sizes) == 1 else f"N = {sizes[0]}..{sizes[-1]}"
+            raise ChainrunError(f"balls: no run has ball {ball} ({n}; balls are numbered "
+                                f"1..N, or -1..-N from the last)")
     units = runs[0].units
     finals = np.concatenate([np.asarray(run.final_velocity) for run in runs])
     label, scaled = axis_label(_final_name(runs), "velocity", units, finals)

@@ -139,6 +139,11 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
     assert (out / "figures" / "sweep-runs.png").is_file()
     result = runner.invoke(main, ["plot", str(out), "--balls", "first"])
     assert result.exit_code == 2 and "--balls 'first'" in result.stderr
+    for balls, bad in (("0", 0), ("1,99", 99), ("-6", -6)):  # table 1: lines of 5 balls
+        result = runner.invoke(main, ["plot", str(out), "--what", "sweep-final",
+                                      "--balls", balls])
+        assert result.exit_code == 2
+        assert f"no run has ball {bad} (N = 5;" in result.stderr
 
 
 def test_an_artefact_name_is_an_artefact_even_beside_a_folder_of_that_name(tmp_path,
