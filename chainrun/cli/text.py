@@ -47,8 +47,9 @@ def run_line(run) -> str:
 def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
     """The velocities where the runs (``RunSummary``) ended as a text table (balls
     down, runs across), under a heading with their unit, for short lines: final
-    velocities where every run reached its terminal state; a checked run's with no
-    digit beyond its spread (``chainrun.units.supported_format``)."""
+    velocities where every run reached its terminal state. Four decimals of the
+    table's unit, more for a value below 0.01 of it (three significant digits); a
+    checked run's with no digit beyond its spread (``chainrun.units.supported_format``)."""
     from chainrun.units import scale_for, supported_format
 
     if (not summaries or any(s.n != summaries[0].n for s in summaries)
@@ -64,8 +65,11 @@ def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
 
     def cell(s, i: int) -> str:
         spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
-        return supported_format(".4f", float(scaled(s.final_velocity[i])),
-                                float(scaled(spread)))
+        v = float(scaled(s.final_velocity[i]))
+        # four decimals, and more for a small value: at least three significant digits
+        small = v != 0.0 and math.isfinite(v) and abs(v) < 0.01
+        decimals = min(12, 2 - math.floor(math.log10(abs(v)))) if small else 4
+        return supported_format(f".{decimals}f", v, float(scaled(spread)))
 
     head = ["n"] + [s.run_id for s in summaries]
     rows = [[str(i + 1)] + [cell(s, i) for s in summaries] for i in range(n)]

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -267,3 +268,21 @@ def test_an_interruption_before_the_runs_begin_is_said_as_one(cli, tmp_path, mon
     assert "chainrun: error: interrupted" in result.output
     assert "Aborted" not in result.output
     assert not (tmp_path / "out").exists()
+
+
+def test_the_velocity_table_keeps_three_digits_of_small_velocities():
+    """Velocities spanning four decades in one unit: each printed value carries at
+    least three significant digits (four decimals where that is more)."""
+    from types import SimpleNamespace
+
+    from chainrun.cli.text import velocity_table
+
+    v = np.array([-2.48812, -0.303617, -0.0213312, -0.00973214, -0.000664127, 0.0])
+    run = SimpleNamespace(n=v.size, units="si", final_velocity=v, terminal=True,
+                          check=None, run_id="speed=3.0")
+    lines = velocity_table([run]).splitlines()
+    assert lines[0] == "final velocities (m/s)"
+    printed = np.array([float(line.split()[1]) for line in lines[2:]])
+    np.testing.assert_allclose(printed[:-1], v[:-1], rtol=5e-3)
+    assert [line.split()[1] for line in lines[2:]] == [
+        "-2.4881", "-0.3036", "-0.0213", "-0.00973", "-0.000664", "0.0000"]
