@@ -206,10 +206,20 @@ def _forces(run, figure: Figure, axes) -> None:
     stride = -(-(run.n - 1) // MAX_IMAGE_BALLS)
     force = run.contact_forces(stride)
     contacts = np.arange(1, run.n)[::stride]
-    label, scaled = axis_label("contact force", "force", run.units, force)
+    # a line under a static load (precompressed, or held by walls) at t = 0: the
+    # change of each contact's force from it, on a scale centred at no change, or a
+    # wave of a few per cent of the load would be a shade of the load's colour
+    loaded = run.times[0] == 0.0 and np.any(force[0] != 0.0)
+    if loaded:
+        force = force - force[0]
+    name = "contact force change since t = 0" if loaded else "contact force"
+    label, scaled = axis_label(name, "force", run.units, force)
     t = _time_axis(axes, run, run.times)(run.times)
-    image = axes.imshow(scaled(force).T, origin="lower", aspect="auto", cmap="magma_r",
-                        vmin=0.0, interpolation="nearest",
+    top = float(np.max(np.abs(scaled(force)))) or 1.0
+    colours = dict(cmap="RdBu_r", vmin=-top, vmax=top) if loaded else dict(cmap="magma_r",
+                                                                          vmin=0.0)
+    image = axes.imshow(scaled(force).T, origin="lower", aspect="auto",
+                        interpolation="nearest", **colours,
                         extent=(t[0], t[-1], contacts[0] - 0.5, contacts[-1] + stride - 0.5),
                         gid="force")
     figure.colorbar(image, ax=axes, label=label)

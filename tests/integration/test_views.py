@@ -171,6 +171,34 @@ def test_the_force_image_and_displacements_are_the_files(wave):
         np.testing.assert_array_equal(a.get_ydata(), raw["x"][int(a.get_gid().split("/")[1])])
 
 
+def test_a_loaded_lines_force_image_is_the_change_from_its_static_load(tmp_path):
+    """A precompressed line: the contact forces at t = 0 are the static load, and the
+    image is each force's change from it, on a scale centred at no change."""
+    out = simulate_text(tmp_path, """name = "p"
+[chain]
+n = 12
+k = 1
+alpha = 1.5
+precompression = 0.2
+[walls.right]
+[output]
+times = {start = 0, stop = 20, step = 0.5}
+[solver]
+t_end = 20
+""")
+    run = read_run(out / "run.h5")
+    with style():
+        figure = draw_view(run, "forces")
+    c = run.positions[:, :-1] - run.positions[:, 1:]
+    force = np.where(c > 0, np.abs(c) ** 1.5, 0.0)  # Hertz: c_+^(3/2)
+    np.testing.assert_allclose(force[0, 1:], 0.2, rtol=1e-12)  # (the striker arrives)
+    image = artist(figure, "force")
+    np.testing.assert_allclose(image.get_array(), (force - force[0]).T, rtol=0, atol=1e-12)
+    low, high = image.get_clim()
+    assert low == -high and high == pytest.approx(np.abs(force - force[0]).max())
+    assert "since t = 0" in figure.axes[-1].get_ylabel()
+
+
 def test_the_sensor_view_is_the_mean_force_stored(tmp_path):
     out = simulate_text(tmp_path, """name = "s"
 [chain]
