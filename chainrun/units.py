@@ -90,6 +90,21 @@ def scale_for(quantity: str, units: str, values=()) -> Scaled:
     return Scaled(to_base / size, prefix + _BASE[quantity][1])
 
 
+def law_unit(quantity: str, exponents, units: str) -> str:
+    """The unit of a force law's coefficient in ``units``: kappa of kappa delta^alpha
+    (``"stiffness"``, ``exponents`` the alphas) in N m-alpha, eta of eta delta^beta
+    d(delta)/dt (``"damping"``, the betas) in N s m-(1+beta); where every contact has
+    one exponent, the unit itself (N m-1.5, N s m-1.25). The paper's units: "1"."""
+    if units != "si":
+        return UNITS["paper"]["stiffness"]
+    e = np.asarray(exponents, dtype=np.float64).reshape(-1)
+    e = e[np.isfinite(e)]
+    one = e.size > 0 and bool(np.all(e == e[0]))
+    if quantity == "stiffness":
+        return f"N m-{float(e[0]):g}" if one else UNITS["si"]["stiffness"]
+    return f"N s m-{1.0 + float(e[0]):g}" if one else "N s m-(1+beta)"
+
+
 def axis_label(name: str, quantity: str, units: str, values=()) -> tuple[str, Scaled]:
     """``"name (unit)"`` for an axis of ``values``, and the scaling to draw them with."""
     scaled = scale_for(quantity, units, values)

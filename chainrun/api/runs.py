@@ -103,7 +103,7 @@ def _unit(quantity: str | None, units: str) -> str | None:
     if quantity is None:
         return None
     if quantity == "damping":
-        return "N s m^-(1+beta)" if units == "si" else _UNITS
+        return "N s m-(1+beta)" if units == "si" else _UNITS
     return UNITS["si"][quantity] if units == "si" else _UNITS
 
 
@@ -111,6 +111,8 @@ def _variables(run) -> tuple[dict, dict]:
     """The run's data variables and coordinates, each variable with its long name and
     units: every number the file holds about the line, its run and its results."""
     import numpy as np
+
+    from chainrun.units import law_unit
 
     line, n, units = run.line, run.n, run.units
     walls = (line.left, line.right)
@@ -179,6 +181,12 @@ def _variables(run) -> tuple[dict, dict]:
     for name, (dims, array, meta, quantity) in data.items():
         unit = _unit(quantity, units)
         out[name] = (dims, array, meta | ({"units": unit} if unit else {}))
+    for name, exponents in (("stiffness", line.alpha), ("damping", line.damping_exponent),
+                            ("wall_stiffness", values["wall_alpha"]),
+                            ("wall_damping", values["wall_damping_exponent"])):
+        if name in out and "units" in out[name][2]:
+            quantity = "damping" if name.endswith("damping") else "stiffness"
+            out[name][2]["units"] = law_unit(quantity, exponents, units)
     for name, unit in (("time", "time"), ("sample", "time")):
         if name in coords:
             coords[name] = (coords[name][0], coords[name][1], {"units": _unit(unit, units)})

@@ -41,7 +41,7 @@ from chainrun.errors import StoreError
 from chainrun.solver import Drive, EventKind, Solution
 from chainrun.store import _h5
 from chainrun.store._h5 import BALL_CHUNK, GZIP, RUN_FORMAT
-from chainrun.units import UNITS
+from chainrun.units import UNITS, law_unit
 
 if TYPE_CHECKING:  # the config parser (pydantic, YAML) is not needed to write files
     from chainrun.config import RunSpec
@@ -64,6 +64,7 @@ OBSERVABLES = {
 
 def _author() -> str:
     return os.environ.get("USER") or "chainrun user"
+
 
 
 class _Element:
@@ -239,6 +240,7 @@ class RunWriter:
         ):
             ds = _h5.array(model, name, getattr(line, name), [scale], long_name)
             ds.attrs["unit"] = units[unit]
+        model["stiffness"].attrs["unit"] = law_unit("stiffness", line.alpha, self._units)
         if line.diameter is not None:
             _h5.array(model, "diameter", line.diameter, [ball],
                    "diameter of each sphere").attrs["unit"] = units["diameter"]
@@ -249,7 +251,7 @@ class RunWriter:
         if line.is_damped:
             eta = _h5.array(model, "damping", line.damping, [contact],
                          "eta of F = max(0, kappa delta^alpha + eta delta^beta d(delta)/dt)")
-            eta.attrs["unit"] = "SI (N s m^-(1+beta))" if self._units == "si" else "1"
+            eta.attrs["unit"] = law_unit("damping", line.damping_exponent, self._units)
             _h5.array(model, "damping_exponent", line.damping_exponent, [contact],
                    "beta, the damping's exponent").attrs["unit"] = "1"
         walls = _h5.group(model, "walls")
@@ -399,16 +401,21 @@ class RunWriter:
         balls = np.asarray(sol.sensor_balls, dtype=np.int64).reshape(-1)
         if balls.size:
             sensors = _h5.group(h5, "sensors")
+            units = UNITS[self._units]
             sample = _h5.scale(sensors, "time", np.asarray(sol.sensor_time, dtype=np.float64),
                             "sample time: 0, dt, 2 dt, ... up to end_time")
+            sample.attrs["unit"] = units["time"]
             sensor = _h5.scale(sensors, "ball", balls, "sensor ball number (1..N)")
             force = np.asarray(sol.sensor_force, dtype=np.float64)
             side = _h5.scale(sensors, "side", np.array([0, 1], dtype=np.int64),
                           "0: the contact towards ball 1; 1: the contact away from it")
             _h5.array(sensors, "force", force, [sample, sensor, side],
-                   "contact force on each side of the sensor ball (0 at a line's end)")
+                   "contact force on each side of the sensor ball (0 at a line's end)"
+                   ).attrs["unit"] = units["force"]
             _h5.array(sensors, "mean_force", force.mean(axis=2), [sample, sensor],
-                   "mean of the two contact forces: what a sensor inside the ball measures")
+                   "mean of the two contact forces: what a sensor inside the ball measures"
+                   ).attrs["unit"] = units["force"]
+            sensors.attrs["time_unit"] = units["time"]  # (of dt and end)
             sensors.attrs["dt"] = np.float64(self._spec.sensor_dt)
             sensors.attrs["end"] = np.float64(np.nan if self._spec.sensor_end is None
                                               else self._spec.sensor_end)
