@@ -52,7 +52,13 @@ def analyze(names: tuple[str, ...], all_: bool, results: Path, check: bool):
         names = tuple(a.name for a in artefacts.ARTEFACTS)
     if not names:
         fail("name at least one artefact, or give --all (see `chainrun plot --list`)")
+    known = {a.name for a in artefacts.ARTEFACTS}
     for name in names:
+        if name not in known and Path(name).exists():
+            fail(f"{name}: analyze derives the paper's artefacts (chainrun plot --list); a "
+                 f"run file or output folder of your own is read by `chainrun info {name}` "
+                 f"(its summary and pulses), drawn by `chainrun plot {name}`, and measured "
+                 f"from Python by chainrun.pulses and chainrun.transmission")
         try:
             path = analyze_artefact(name, results=results, check=check)
         except ChainrunError as exc:

@@ -286,3 +286,11 @@ def test_the_velocity_table_keeps_three_digits_of_small_velocities():
     np.testing.assert_allclose(printed[:-1], v[:-1], rtol=5e-3)
     assert [line.split()[1] for line in lines[2:]] == [
         "-2.4881", "-0.3036", "-0.0213", "-0.00973", "-0.000664", "0.0000"]
+
+
+def test_analyze_points_a_run_of_ones_own_to_info_and_plot(cli, tmp_path):
+    run = tmp_path / "mine.h5"
+    run.write_bytes(b"")
+    result = cli("analyze", run)
+    assert result.exit_code == 2 and len(result.stderr.strip().splitlines()) == 1
+    assert f"chainrun info {run}" in result.stderr and f"chainrun plot {run}" in result.stderr
