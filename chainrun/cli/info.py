@@ -228,10 +228,27 @@ def _holding(s) -> str:
     return f"{s.check.holding(s.speed or 1.0)}/{s.n}"
 
 
-def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
+def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
+    """The pulse numbers an ensemble averages, each run's (``measure_pulses``): the
+    wave's speed, and the peak force and arrival time at each sensor ball."""
+    p0 = pulses[0]
+    si = p0.speed_si is not None
+    per = "balls/s" if p0.units == "si" else "balls per unit time"
+    rows = [("wave speed" + ("" if si else f" ({per})"), "velocity" if si else None,
+             np.array([(p.speed_si if si else p.speed).value for p in pulses]))]
+    for i, ball in enumerate(p0.balls):
+        rows.append((f"peak force at ball {ball}", "force",
+                     np.array([p.peak_force[i] for p in pulses])))
+        rows.append((f"arrival at ball {ball}", "time",
+                     np.array([p.arrival_time[i] for p in pulses])))
+    return rows
+
+
+def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
     """An output folder of several runs: a line per run, and for an ``ensemble`` (one
     line over random seeds) the mean and sample standard deviation of each summary
-    number over the runs."""
+    number over the runs, and of its ``pulses`` (each run's ``measure_pulses``) where
+    the runs have force sensors."""
     from chainrun.units import scale_for
 
     units = summaries[0].units
@@ -256,8 +273,10 @@ def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
                   "(min ... max)"]
-    for label, quantity, value in _ENSEMBLE:
-        x = np.array([value(s) for s in summaries], dtype=float)
+    rows = [(label, quantity, np.array([value(s) for s in summaries], dtype=float))
+            for label, quantity, value in _ENSEMBLE]
+    rows += _ensemble_pulses(pulses) if pulses else []
+    for label, quantity, x in rows:
         sd = float(np.std(x, ddof=1)) if x.size > 1 else math.nan
         if quantity is None:
             unit, (mean, sd, lo, hi) = "", (x.mean(), sd, x.min(), x.max())
@@ -271,6 +290,14 @@ def render_folder(path: Path, summaries, ensemble: bool = False) -> str:
     return "\n".join(lines)
 
 
+def _pulsed(run) -> bool:
+    """Whether the run's sensors saw pulses: it has sensors, and nothing drives it."""
+    line = run.line
+    return bool(run.sensor_balls.size) and not (
+        line.drives or any(w is not None and w.motion is not None
+                           for w in (line.left, line.right)))
+
+
 def _sensors(run) -> list[str]:
     """The section of what the run's force sensors recorded: the pulses
     (``measure_pulses``), or for a line driven by a wall's sine its steady response
@@ -280,9 +307,7 @@ def _sensors(run) -> list[str]:
 
     if not run.sensor_balls.size:
         return []
-    line = run.line
-    if not (line.drives or any(w is not None and w.motion is not None
-                               for w in (line.left, line.right))):
+    if _pulsed(run):
         return _pulse_lines(measure_pulses(run))
     from chainrun.analysis.transmission import HARMONICS, measure
 
@@ -339,7 +364,9 @@ def info(paths: tuple[Path, ...]):
     phase and transmission at the drive's frequency, and what the file stores. For an output folder (a sweep or an
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
     deviation and range of each number over the runs when they are an ensemble (the
-    same line over random seeds); the full summary when the folder holds a single run.
+    same line over random seeds), their pulses' too where they have force sensors (the
+    wave's speed, each sensor's peak force and arrival); the full summary when the
+    folder holds a single run.
 
     \b
     Examples:
@@ -347,6 +374,7 @@ def info(paths: tuple[Path, ...]):
       chainrun info results/table1
     """
     from chainrun.analysis.ensemble import is_ensemble
+    from chainrun.analysis.pulse import measure_pulses
     from chainrun.analysis.summary import summarize
     from chainrun.paths import INDEX_NAME
     from chainrun.store import read_index, read_run
@@ -368,7 +396,10 @@ def info(paths: tuple[Path, ...]):
                     click.echo(render(summaries[0], _sensors(run)))
                 else:
                     runs = [read_run(path / str(r["file"])) for r in rows]
-                    click.echo(render_folder(path, summaries, is_ensemble(runs)))
+                    ensemble = is_ensemble(runs)
+                    pulses = ([measure_pulses(run) for run in runs]
+                              if ensemble and all(_pulsed(run) for run in runs) else None)
+                    click.echo(render_folder(path, summaries, ensemble, pulses))
             else:
                 run = read_run(path)
                 click.echo(render(summarize(run), _sensors(run)))

@@ -141,12 +141,11 @@ def test_a_damped_ensemble_draws_the_energy_it_keeps(tmp_path):
     assert energy.get_ydata()[0] == pytest.approx(100.0) and energy.get_ydata()[-1] < 90
 
 
-def test_pulses_of_an_ensemble_are_each_runs_along_run(tmp_path):
-    """An ensemble of SI lines (the beads' diameters drawn by seed, each its own time
-    scale, the runs ending at different times) read as one Dataset: its runs share one
-    sample axis, and ``pulses`` measures each run as from its own file, along ``run``,
-    whether given the sweep, one run of it, or the folder."""
-    out = simulate_text(tmp_path, """name = "beads"
+@pytest.fixture(scope="module")
+def beads(tmp_path_factory):
+    """An ensemble of SI lines with force sensors: the beads' diameters drawn by seed,
+    each line its own time scale, the runs ending at different times."""
+    return simulate_text(tmp_path_factory.mktemp("beads"), """name = "beads"
 units = "si"
 [chain]
 n = 16
@@ -163,13 +162,19 @@ sensor_dt = 5e-7
 [sweep]
 "chain.diameter.seed" = [1, 2, 3]
 """)
-    ds = chainrun.open_sweep(out)
+
+
+def test_pulses_of_an_ensemble_are_each_runs_along_run(beads):
+    """The ensemble read as one Dataset: its runs share one sample axis, and ``pulses``
+    measures each run as from its own file, along ``run``, whether given the sweep,
+    one run of it, or the folder."""
+    ds = chainrun.open_sweep(beads)
     assert ds.sizes["sample"] == 2001 and not ds.sensor_force.isnull().any()
     measured = chainrun.pulses(ds)
     assert measured.peak_force.dims == ("run", "sensor")
     assert list(measured["chain.diameter.seed"].values) == [1, 2, 3]
     for r, seed in enumerate([1, 2, 3]):
-        alone = chainrun.pulses(out / f"diameter_seed={seed}.h5")
+        alone = chainrun.pulses(beads / f"diameter_seed={seed}.h5")
         for name in ("peak_force", "arrival_time", "width", "wave_speed_si"):
             np.testing.assert_array_equal(measured[name].isel(run=r).values,
                                           alone[name].values)
@@ -177,4 +182,19 @@ sensor_dt = 5e-7
                                       alone.wave_speed_si)
     assert np.all(np.isfinite(measured.wave_speed_si.values))
     assert measured.wave_speed_si.attrs["units"] == "m/s"
-    np.testing.assert_array_equal(chainrun.pulses(out).peak_force, measured.peak_force)
+    np.testing.assert_array_equal(chainrun.pulses(beads).peak_force, measured.peak_force)
+
+
+def test_info_of_an_ensemble_averages_its_pulses(beads):
+    out = CliRunner().invoke(main, ["info", str(beads)]).stdout
+    measured = chainrun.pulses(beads)
+    rows = {"wave speed": (measured.wave_speed_si.values, 1.0),
+            "peak force at ball 10": (measured.peak_force.sel(sensor=10).values, 1.0),
+            "arrival at ball 15": (measured.arrival_time.sel(sensor=15).values, 1e6)}
+    for label, (values, factor) in rows.items():
+        line = next(line for line in out.splitlines() if line.strip().startswith(label))
+        mean, sd = (float(x) for x in re.search(r"([\d.]+) \+- ([\d.]+)", line).groups())
+        assert mean == pytest.approx(factor * values.mean(), rel=1e-3), line
+        assert sd == pytest.approx(factor * values.std(ddof=1), rel=1e-3), line
+    assert "m/s" in next(line for line in out.splitlines() if "wave speed" in line)
+    assert "µs" in next(line for line in out.splitlines() if "arrival at ball 15" in line)
