@@ -19,6 +19,8 @@ shows, so tests can match what is drawn with the file.
 from __future__ import annotations
 
 import difflib
+import math
+import textwrap
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -68,27 +70,34 @@ _SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "
 #: where it hides no curve
 _LEGEND_INSIDE = 4
 _LEGEND_LABEL = 24
+_LEGEND_WRAP = 30
 
 
 def _legend(axes) -> None:
-    """The axes' legend: inside them where it is short, else beside them."""
-    labels = axes.get_legend_handles_labels()[1]
+    """The axes' legend: inside them where it is short, else beside them, each label
+    wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line would take the
+    figure's width from the axes)."""
+    handles, labels = axes.get_legend_handles_labels()
     if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
         axes.legend(fontsize="small")
     else:
-        axes.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
+        axes.legend(handles, [textwrap.fill(label, _LEGEND_WRAP) for label in labels],
+                    fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
                     borderaxespad=0.0)
 
 
 def _symlog(axes, values) -> None:
-    """A symmetric log scale over ``values`` (linear below the smallest non-zero
-    magnitude), with room above and below the extreme points and no negative half
-    where nothing is negative."""
+    """A symmetric log scale over ``values`` (linear below the power of ten at or below
+    the smallest non-zero magnitude), with room above and below the extreme points, no
+    negative half where nothing is negative and no positive half where nothing is
+    positive."""
     small = np.abs(values[values != 0.0])
-    axes.set_yscale("symlog", linthresh=max(float(small.min()) if small.size else 1.0,
-                                            1e-12))
+    # the power of ten at or below the smallest magnitude: the linear part then ends
+    # on a labelled decade, a decade's height from 0, not between two labels
+    least = max(float(small.min()) if small.size else 1.0, 1e-12)
+    axes.set_yscale("symlog", linthresh=10.0 ** math.floor(math.log10(least)))
     top, bottom = float(np.max(values, initial=0.0)), float(np.min(values, initial=0.0))
-    axes.set_ylim(2.0 * bottom, 2.0 * top if top > 0.0 else None)
+    axes.set_ylim(2.0 * bottom if bottom < 0.0 else 0.0, 2.0 * top if top > 0.0 else 0.0)
 
 
 def _drawn(table, quantity: str, units: str) -> str | None:

@@ -340,7 +340,7 @@ def test_no_two_of_ninety_curves_look_alike():
     assert len(looks) == 90
 
 
-def test_a_log_scale_keeps_every_point_inside_and_no_empty_negative_half(wave):
+def test_a_log_scale_keeps_every_point_inside_and_no_empty_half(wave):
     path, raw = wave
     with style():
         axes = draw_view(read_run(path), "final", log=True).axes[0]
@@ -357,6 +357,15 @@ def test_a_log_scale_keeps_every_point_inside_and_no_empty_negative_half(wave):
     _symlog(axes, forward)
     bottom, top = axes.get_ylim()
     assert bottom == 0.0 and top > forward.max()
+    # every ball rebounding: no empty positive half, and the linear part about 0 ends
+    # on a decade (0.01 below 0.0763), not between the labels of 0 and its neighbour
+    back = np.array([-88.0, -7.6, -0.31, -0.0763])
+    axes = Figure().add_subplot()
+    axes.plot(np.arange(back.size), back)
+    _symlog(axes, back)
+    bottom, top = axes.get_ylim()
+    assert top == 0.0 and bottom < back.min()
+    assert axes.yaxis.get_transform().linthresh == 0.01
 
 
 def test_a_long_legend_stands_beside_the_axes(beads):
