@@ -6,6 +6,7 @@ non-zero exit status, never a traceback.
 
 from __future__ import annotations
 
+import difflib
 import math
 import reprlib
 from typing import Any
@@ -21,6 +22,13 @@ _BREAKS = {c: repr(chr(c))[1:-1] for c in [*range(0x20), *range(0x7F, 0xA0), 0x2
 def one_line(text: str) -> str:
     """``text`` with line breaks and control characters written as escapes."""
     return text.translate(_BREAKS)
+
+
+def suggest(word: str, choices) -> str:
+    """`` (did you mean 'x'?)`` for the choice closest to a misspelled ``word``, else
+    ""."""
+    close = difflib.get_close_matches(word, list(choices), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def show_value(value: Any) -> str:

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from chainrun.errors import show_value
+from chainrun.errors import show_value, suggest
 
 __all__ = ["BASES", "Values", "ValuesError", "check", "digest", "expand", "is_uniform",
            "read_rows"]
@@ -263,7 +263,8 @@ def _check_table(table: Mapping, text: bool, base_dir: str) -> dict:
     allowed = set(BASES[base]) | {"impurity"}
     for key in keys:
         if key not in allowed:
-            raise ValuesError(f"unknown key for a {base!r} table", (key,))
+            raise ValuesError(f"unknown key for a {base!r} table"
+                              f"{suggest(key, sorted(allowed))}", (key,))
     if text and base not in ("value", "pattern"):
         raise ValuesError(f"{base!r} makes numbers; text takes 'value' or 'pattern'", (base,))
     item = _text if text else _number

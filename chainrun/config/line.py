@@ -18,7 +18,7 @@ import numpy as np
 from chainrun import generators
 from chainrun.config.problems import Problem, key_path
 from chainrun.config.schema import CHECK_MAX_N, RULES, SI_KEYS, Chain, Walls, rule_reason
-from chainrun.errors import show_value
+from chainrun.errors import show_value, suggest
 from chainrun.generators import Values, ValuesError
 from chainrun.materials import MATERIALS
 from chainrun.solver import Line
@@ -60,7 +60,8 @@ def _expanded(chain: Chain, key: str, size: int, problems: list[Problem],
         if unknown:
             i = unknown[0]
             problems.append(Problem(f"{prefix}.{key}[{i}]", f"unknown material "
-                                    f"{show_value(a[i])} (known: {', '.join(MATERIALS)})"))
+                                    f"{show_value(a[i])}{suggest(str(a[i]), MATERIALS)} "
+                                    f"(known: {', '.join(MATERIALS)})"))
             return None
         return a
     bad = ~np.isfinite(a)

@@ -9,7 +9,6 @@ which model sits at which key that ``translate`` is given.
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Mapping
 from typing import Any, NamedTuple
@@ -17,7 +16,7 @@ from typing import Any, NamedTuple
 from pydantic import BaseModel, ValidationError
 from pydantic_core import PydanticCustomError
 
-from chainrun.errors import show_value
+from chainrun.errors import show_value, suggest
 
 #: Largest integer a config may hold: run files store integers as int64.
 MAX_INT = 2**63 - 1
@@ -74,11 +73,6 @@ def bound(value: Any) -> str:
     if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
         return str(int(value))
     return repr(value)
-
-
-def suggest(word: str, choices: list[str]) -> str:
-    close = difflib.get_close_matches(word, choices, n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 # --- scalar checks shared by the models and the sweep table -------------------------------

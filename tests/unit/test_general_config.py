@@ -188,6 +188,10 @@ def test_si_mixed_materials_and_explicit_constants():
                                      "(or give chain.material)"),
     ("diameter = 0.01\nmaterial = ['steel', 'glass', 'wood']",
      "chain.material[2]: unknown material 'wood'"),
+    ("diameter = 0.01\nmaterial = ['steel', 'glas', 'steel']",
+     "chain.material[1]: unknown material 'glas' (did you mean 'glass'?)"),
+    ("material = 'steel'\ndiameter = {random = 'uniform', low = 0.01, hi = 0.02}",
+     "chain.diameter.hi: unknown key for a 'random' table (did you mean 'high'?)"),
 ])
 def test_si_conflicts(chain, expected):
     lines = problems(HEAD + f'units = "si"\n[chain]\nn = 3\nk = 1\n{chain}\n')
