@@ -117,7 +117,7 @@ def fit_window(times, frequency: float, start: float, periods: int | None = None
         Sample times, increasing.
     frequency : float
     start : float
-        The window begins at or after this time.
+        The window begins at or after this time (and the first sample).
     periods : int, optional
         Periods to take; by default as many as fit between ``start`` and the last
         sample.
@@ -132,6 +132,7 @@ def fit_window(times, frequency: float, start: float, periods: int | None = None
         If not one whole period fits, or ``periods`` do not.
     """
     end = float(times[-1])
+    start = max(start, float(times[0]))  # (nothing to fit before the first sample)
     fit = math.floor((end - start) * frequency + _PERIOD_SLACK)
     if periods is None:
         periods = fit

@@ -49,6 +49,8 @@ def test_the_window_is_whole_periods_ending_at_the_last_sample():
     begin, end, periods = fit_window(t, 2.5, 0.0)      # exactly 25 periods fit
     assert periods == 25 and begin == pytest.approx(0.0, abs=1e-12)
     assert fit_window(t, 2.5, 0.0, periods=4)[2] == 4
+    # a start before the record is its first sample: the 25 periods it holds
+    assert fit_window(t, 2.5, -1.0) == fit_window(t, 2.5, 0.0)
 
 
 @pytest.mark.parametrize("start, periods, message", [
