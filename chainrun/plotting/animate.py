@@ -7,15 +7,19 @@ the run file alone.
 Where the balls are drawn. A line of real spheres (an SI run with diameters) is drawn
 to scale: each ball at its true diameter, touching its neighbours at rest, ball 1's
 left side at position 0. Displacements of a few micrometres against beads of
-millimetres would not show, so every displacement and gap is drawn magnified by a
-factor written on the frame: ball i's centre is at its place at rest plus
-``magnify * (g_1 + ... + g_(i-1) + x_i(t))``. Pressed balls then overlap by their
-magnified compression, and a wall stands its magnified gap away from the end ball. A
+millimetres would not show, so every displacement from the initial state and gap is
+drawn magnified by a factor written on the frame: ball i's centre is at its place at
+rest plus ``x_i(0) + magnify * (g_1 + ... + g_(i-1) + x_i(t) - x_i(0))`` (a gap < 0,
+an initial overlap, counts in x_i(0)). The initial state is drawn true to scale (a
+precompressed line's static squeeze, micrometres, does not show), the motion from it
+magnified. Pressed balls then overlap by their magnified
+compression beyond the initial one, and a wall stands its magnified gap away from the
+end ball. A
 line without diameters (the paper's line, or masses and stiffnesses given directly)
 is a schematic: ball n at place n, one paper unit of length wide, with the same
 magnified motion. The automatic factor (1, 2 or 5 times a power of ten) makes the
-largest compression ``COMPRESSION_SHOWN`` of the smallest diameter, unless that
-would make the magnified motion longer than the line itself.
+largest compression beyond the initial one ``COMPRESSION_SHOWN`` of the smallest
+diameter, unless that would make the magnified motion longer than the line itself.
 
 Frames are drawn by blitting: the figure (axes, walls, colour bar, labels) is drawn
 once, and each frame restores it and draws only the balls and the time. GIF frames
@@ -66,14 +70,21 @@ class Picture:
         Centre of each ball shown at rest, touching, without gaps.
     width : ndarray, shape (n,)
         Diameter of each ball shown.
+    start : ndarray, shape (n,)
+        Each ball's initial displacement plus the initial overlaps (gaps < 0) before
+        it, in the run's unit of length: scaled by ``length``, it is added to
+        ``place``.
     motion : ndarray, shape (F, n)
-        Gaps before each ball plus its displacement at each frame, in the run's unit
-        of length: magnified, then scaled by ``length``, it is added to ``place``.
-    walls : dict of str to (float, float)
-        For each wall drawn ("left", "right"): its face at rest (drawing's unit) and
-        its gap's share of the motion (the run's unit), as for a ball.
+        Gaps before each ball plus its displacement from ``start`` at each frame, in
+        the run's unit of length: magnified, then scaled by ``length``, it is added to
+        ``place`` and ``start``.
+    walls : dict of str to (float, float, float)
+        For each wall drawn ("left", "right"): its face at rest (drawing's unit), and
+        its overlap's and its gap's shares of the start and of the motion (the run's
+        unit), as for a ball.
     compression : float
-        The largest compression of a contact or wall over the frames (run's unit).
+        The largest compression of a contact or wall over the frames beyond its
+        initial one, if that was pressed (run's unit).
     to_scale : bool
         Whether the balls are real spheres drawn to scale (else a schematic).
     """
@@ -81,6 +92,7 @@ class Picture:
     length: Scaled
     place: np.ndarray
     width: np.ndarray
+    start: np.ndarray
     motion: np.ndarray
     walls: dict
     compression: float
@@ -88,12 +100,12 @@ class Picture:
 
     def centres(self, magnify: float) -> np.ndarray:
         """Centres of the balls at each frame, shape (F, n)."""
-        return self.place + self.length(magnify * self.motion)
+        return self.place + self.length(self.start + magnify * self.motion)
 
     def wall_faces(self, magnify: float) -> dict[str, float]:
         """Where each wall's face is drawn."""
-        return {side: face + float(self.length(magnify * gap))
-                for side, (face, gap) in self.walls.items()}
+        return {side: face + float(self.length(start + magnify * gap))
+                for side, (face, start, gap) in self.walls.items()}
 
     def auto_magnify(self) -> float:
         """The largest of 1, 2, 5 times a power of ten that shows the largest
@@ -105,7 +117,7 @@ class Picture:
             limits.append(COMPRESSION_SHOWN * float(self.width.min())
                           / (self.compression * one))
         spread = np.concatenate([self.motion.ravel(),
-                                 [gap for _, gap in self.walls.values()]])
+                                 [gap for _, _, gap in self.walls.values()]])
         if np.ptp(spread) > 0.0:
             line = float(self.place[-1] - self.place[0]
                          + (self.width[0] + self.width[-1]) / 2.0)
@@ -124,7 +136,10 @@ def _picture(run, frames: np.ndarray, first: int, last: int) -> Picture:
     cols = slice(first - 1, last)
     x = np.asarray(run.positions[:, cols])[frames]
     gap = np.asarray(line.gap, dtype=float)
-    before = np.concatenate([[0.0], np.cumsum(gap)])  # gaps before each ball, (N,)
+    # a gap is drawn magnified, an initial overlap (a gap < 0) true to scale, as the
+    # initial displacements: each ball's share of the gaps before it, (N,)
+    before = np.concatenate([[0.0], np.cumsum(np.maximum(gap, 0.0))])
+    overlap = np.concatenate([[0.0], np.cumsum(np.minimum(gap, 0.0))])
     if line.diameter is not None:
         diameter = np.asarray(line.diameter, dtype=float)
         rest = np.cumsum(diameter) - diameter / 2.0  # ball 1's left side at 0
@@ -137,20 +152,32 @@ def _picture(run, frames: np.ndarray, first: int, last: int) -> Picture:
         length = Scaled(1.0 / unit, "")
         place, width = np.arange(1.0, n + 1.0), np.ones(n)
 
-    # compressions of the contacts between the balls shown and of the walls beside them
-    squeeze = [x[:, :-1] - x[:, 1:] - gap[first - 1:last - 1]]
+    x0 = np.asarray(line.position, dtype=float)[cols]
+
+    def squeeze(x):
+        """Compressions of the contacts between the balls shown and of the walls beside
+        them, at each row of x."""
+        out = [x[:, :-1] - x[:, 1:] - gap[first - 1:last - 1]]
+        if line.left is not None and first == 1:
+            out.append(-x[:, :1] - line.left.gap)
+        if line.right is not None and last == n:
+            out.append(x[:, -1:] - line.right.gap)
+        return np.concatenate(out, axis=1)
+
     drawn = {}
     if line.left is not None and first == 1:
-        squeeze.append(-x[:, :1] - line.left.gap)
-        drawn["left"] = (float(place[0] - width[0] / 2.0), -line.left.gap)
+        g = line.left.gap
+        drawn["left"] = (float(place[0] - width[0] / 2.0), -min(g, 0.0), -max(g, 0.0))
     if line.right is not None and last == n:
-        squeeze.append(x[:, -1:] - line.right.gap)
+        g = line.right.gap
         drawn["right"] = (float(place[-1] + width[-1] / 2.0),
-                          float(before[-1]) + line.right.gap)
-    compression = max(float(np.max(s, initial=0.0)) for s in squeeze)
+                          float(overlap[-1]) + min(g, 0.0), float(before[-1]) + max(g, 0.0))
+    # beyond the initial compression where that was pressed (a static load)
+    beyond = squeeze(x) - np.maximum(squeeze(x0[None, :]), 0.0)
+    compression = float(np.max(beyond, initial=0.0))
     return Picture(length=length, place=place[cols], width=width[cols],
-                   motion=before[cols] + x, walls=drawn, compression=compression,
-                   to_scale=line.diameter is not None)
+                   start=x0 + overlap[cols], motion=before[cols] + x - x0, walls=drawn,
+                   compression=compression, to_scale=line.diameter is not None)
 
 
 def _frames(run) -> np.ndarray:
@@ -300,8 +327,10 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
         one = ("lengths in " + PAPER if units != "si" else
                "1 = " + format_value(1.0 / shown.length.factor, "position", units))
         axes.set_xlabel(f"ball (schematic: ball n at n, 1 wide; {one})")
-    gaps = np.any(run.line.gap) or any(g for _, g in shown.walls.values())
-    stated = "displacements" + (" and gaps" if gaps else "") + f" × {magnify:g}"
+    gaps = np.any(np.asarray(run.line.gap) > 0.0) or any(
+        g for _, _, g in shown.walls.values())
+    moved = "displacements from t = 0" if np.any(shown.start) else "displacements"
+    stated = moved + (" and gaps" if gaps else "") + f" × {magnify:g}"
     axes.set_title(stated, loc="right", fontsize="medium").set_gid("magnification")
     time = axes.set_title(clock[-1], loc="left", fontsize="medium")
     time.set_gid("time")

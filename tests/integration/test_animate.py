@@ -156,6 +156,45 @@ def test_the_automatic_magnification_shows_the_compression(steel_file):
     assert 0.1 * d.min() * 1e3 < overlap <= 0.25 * d.min() * 1e3
 
 
+def test_a_loaded_line_is_drawn_true_to_scale_and_its_motion_from_it_magnified(tmp_path):
+    """Glass beads precompressed against a wall, struck: the static state is drawn true
+    to scale (its squeeze, micrometres, does not show), the displacements from it
+    magnified, by a factor that shows the compression beyond the static one."""
+    path = simulate_text(tmp_path, """name = "loaded"
+units = "si"
+[chain]
+n = 11
+k = 1
+speed = 0.05
+diameter = 0.01
+material = "glass"
+precompression = 5.0
+[walls.right]
+material = "steel"
+[output]
+times = {start = 0.0, stop = 2.0e-4, step = 4.0e-6}
+[solver]
+t_end = 2.0e-4
+""") / "run.h5"
+    with h5py.File(path) as h5:
+        d = h5["model/diameter"][()]
+        x = h5["particles/chain/position/value"][:, :, 0]
+        wall_gap = h5["model/walls/right"].attrs["gap"]
+    figure, artists, centres, _ = _movie(path)
+    factor = float(artists["magnification"].get_text().rpartition("× ")[2])
+    mm = 1e3
+    rest = np.cumsum(d) - d / 2
+    np.testing.assert_allclose(centres, mm * (rest + x[0] + factor * (x - x[0])),
+                               rtol=0, atol=1e-9)
+    assert np.abs(x[0]).max() > 1e-7  # (a static squeeze of tenths of micrometres)
+    right = mm * (d.sum() + min(wall_gap, 0.0) + factor * max(wall_gap, 0.0))
+    assert artists["wall/right"].get_x() == pytest.approx(right)
+    assert artists["magnification"].get_text().startswith("displacements from t = 0 × ")
+    squeeze = np.append(x[:, :-1] - x[:, 1:], x[:, -1:] - wall_gap, axis=1)
+    beyond = (squeeze - np.maximum(squeeze[0], 0.0)).max()
+    assert factor * beyond <= 0.25 * d.min() < 5 * factor * beyond  # (1, 2, 5 steps)
+
+
 def test_a_line_in_paper_units_is_a_schematic(run_file):
     with h5py.File(run_file) as h5:
         x = h5["particles/chain/position/value"][:, :, 0]
