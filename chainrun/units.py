@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PAPER", "UNITS", "Scaled", "axis_label", "format_supported", "format_value",
+__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "format_supported", "format_value",
            "scale_for", "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
@@ -35,6 +35,13 @@ UNITS: dict[str, dict[str, str]] = {
                             "momentum", "stiffness", "alpha", "gap", "diameter",
                             "frequency", "angular_frequency", "linear_stiffness"), "1"),
 }
+
+#: The quantity of a swept key's values, by the key's last part (``chain.speed``:
+#: a velocity), for their unit: a key not here is a number without one (a seed, K).
+SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "diameter",
+                  "gap": "gap", "force": "force", "t_end": "time", "mass": "mass",
+                  "restitution_speed": "velocity", "frequency": "frequency",
+                  "amplitude": "position", "ramp": "time"}
 
 #: The unit a prefix goes on, for each SI quantity that takes one: a mass in grams, a
 #: momentum in newton seconds (kg m/s), a velocity on its metre.

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from chainrun.paths import index_file
+from chainrun.units import SWEPT_QUANTITY
 
 __all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
@@ -259,6 +260,29 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
 #: outcome of each, and every diagnostic.
 _PER_RUN = ("outcome", "terminal", "end_time", "message", "dissipated_energy",
             "final_drive_work", "config_hash", "n", "k", "alpha")
+#: What each of those is along run, and its quantity (for its units; "wall": seconds
+#: of the computer's clock, None: a number without a unit)
+_PER_RUN_ATTRS = {
+    "outcome": ("how the run ended", None), "terminal": ("whether it reached its "
+                                                          "terminal state", None),
+    "end_time": ("time the run ended", "time"), "message": ("the run's summary line", None),
+    "final_drive_work": ("work of the drives over the run", "energy"),
+    "config_hash": ("sha256 of the run's resolved configuration", None),
+    "n": ("balls in the line", None), "k": ("balls that strike (K)", None),
+    "diagnostics_steps": ("accepted integration steps", None),
+    "diagnostics_rejected_steps": ("rejected integration steps", None),
+    "diagnostics_events": ("contact events", None),
+    "diagnostics_momentum_error": ("momentum error, relative to the line's scale", None),
+    "diagnostics_energy_error": ("energy balance error, relative to the impact energy",
+                                 None),
+    "diagnostics_energy_correction": ("energy restored by the projection, relative", None),
+    "diagnostics_wall_time": ("the solver's wall-clock time", "wall"),
+    "diagnostics_max_window": ("most balls integrated at once", None),
+    "diagnostics_rtol": ("relative tolerance of a step", None),
+    "diagnostics_velocity_floor": ("velocity floor of the contact rules, in the line's "
+                                   "velocity scale", None),
+    "diagnostics_closed_form_collisions": ("isolated binary collisions taken whole", None),
+}
 #: Values that fill a run's shorter event log (its events are numbered 0..E-1).
 _EVENT_FILL = {"event_contact": -1, "event_kind": 0}
 
@@ -316,6 +340,18 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
         out.attrs.pop(key, None)
     out.attrs.pop("overrides", None)
     out = out.assign_coords(run=[str(row["run_id"]) for row in rows], **swept)
+    units = out.attrs.get("units")
+    for key in keys:
+        quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])
+        unit = _unit(quantity, "si" if units == "SI" else "paper")
+        out[key].attrs = {"long_name": f"the swept key {key}", **({"units": unit} if unit
+                                                                   else {})}
+    for key in per_run:
+        if key in _PER_RUN_ATTRS and key in out.data_vars and not out[key].attrs:
+            text, quantity = _PER_RUN_ATTRS[key]
+            unit = "s" if quantity == "wall" else _unit(quantity, "si" if units == "SI"
+                                                        else "paper")
+            out[key].attrs = {"long_name": text, **({"units": unit} if unit else {})}
     return out.assign(event_count=("run", np.array(counts),
                                    {"long_name": "events in each run's log"}))
 

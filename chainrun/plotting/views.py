@@ -28,7 +28,7 @@ from matplotlib.ticker import MaxNLocator
 
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
-from chainrun.units import axis_label, format_value, scale_for
+from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, scale_for
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
            "draw_view"]
@@ -59,12 +59,6 @@ def _law(alpha: np.ndarray) -> str:
         return {1.0: "linear contacts", 1.5: "Hertz contacts"}.get(a, f"contacts ^{a:g}")
     return "mixed contact laws"
 
-
-#: The quantity of a swept key's values, by its last part (for its axis's unit).
-_SWEPT_QUANTITY = {"speed": "velocity", "precompression": "force", "diameter": "diameter",
-                   "gap": "gap", "force": "force", "t_end": "time", "mass": "mass",
-                   "restitution_speed": "velocity", "frequency": "frequency",
-                   "amplitude": "position", "ramp": "time"}
 
 #: a legend of more entries than this, or of longer labels, goes beside the axes,
 #: where it hides no curve
@@ -400,7 +394,7 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
             x, y = np.array(sorted(points)).T
             name = "last ball" if ball == -1 else (f"ball {ball}" if ball > 0
                                                     else f"ball N{ball + 1:+d}")
-            quantity = _SWEPT_QUANTITY.get(key.rpartition(".")[2])
+            quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])
             xlabel, along = (axis_label(key, quantity, units, x) if quantity
                              else (key, scale_for("alpha", "paper")))
             axes.plot(along(x), scaled(y), label=name, gid=f"final_velocity/{key}/{ball}",

@@ -170,6 +170,12 @@ def test_pulses_of_an_ensemble_are_each_runs_along_run(beads):
     one run of it, or the folder."""
     ds = chainrun.open_sweep(beads)
     assert ds.sizes["sample"] == 2001 and not ds.sensor_force.isnull().any()
+    # every number along run says what it is, and its unit where it has one
+    for name in ("end_time", "diagnostics_wall_time", "diagnostics_steps", "outcome",
+                 "chain.diameter.seed"):
+        assert ds[name].attrs["long_name"], name
+    assert ds.end_time.attrs["units"] == ds.diagnostics_wall_time.attrs["units"] == "s"
+    assert "units" not in ds["chain.diameter.seed"].attrs  # a seed is a number
     measured = chainrun.pulses(ds)
     assert measured.peak_force.dims == ("run", "sensor")
     assert list(measured["chain.diameter.seed"].values) == [1, 2, 3]

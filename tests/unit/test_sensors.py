@@ -165,6 +165,7 @@ t_end = 5e-3
     ds = chainrun.open_sweep(out)
     assert ds.sizes["sample"] == 1001
     assert not ds.sensor_force.isnull().any()
+    assert ds["chain.diameter"].attrs["units"] == "m"  # the swept key's own unit
 
 
 @pytest.mark.parametrize("output, expected", [
