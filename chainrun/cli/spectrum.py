@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 from chainrun.cli.common import EXIT_BAD_INPUT, fail
 from chainrun.errors import ChainrunError, ConfigError
@@ -42,17 +43,25 @@ def summary(ds) -> list[str]:
     if "band_bottom" in ds:
         bottom, top = ds["band_bottom"].values, ds["band_top"].values
         period = int(ds.attrs["period"])
-        bands = "; ".join(f"{format_value(float(a), 'angular_frequency', units)} ... "
-                          f"{format_value(float(b), 'angular_frequency', units)}"
-                          for a, b in zip(bottom, top))
+
+        def between(a: float, b: float) -> str:
+            """omega from a to b, and f (the drives' frequency) in brackets."""
+            turn = 2.0 * np.pi
+            return (f"{format_value(a, 'angular_frequency', units)} ... "
+                    f"{format_value(b, 'angular_frequency', units)} (f "
+                    f"{format_value(a / turn, 'frequency', units)} ... "
+                    f"{format_value(b / turn, 'frequency', units)})")
+
+        bands = "; ".join(between(float(a), float(b)) for a, b in zip(bottom, top))
         lines.append(f"  periodic, {period} ball{'s' * (period != 1)} per cell; pass "
                      f"band{'s' * (period != 1)} (omega): {bands}")
-        gaps = [f"{format_value(float(top[b]), 'angular_frequency', units)} ... "
-                f"{format_value(float(bottom[b + 1]), 'angular_frequency', units)}"
+        gaps = [between(float(top[b]), float(bottom[b + 1]))
                 for b in range(bottom.size - 1) if bottom[b + 1] > top[b]]
+        cut = float(top[-1])
         lines.append(f"  band gap{'s' * (len(gaps) != 1)}: {'; '.join(gaps)}" if gaps
-                     else f"  cut-off: {format_value(float(top[-1]), 'angular_frequency', units)}"
-                     " (no gap below it)")
+                     else f"  cut-off: {format_value(cut, 'angular_frequency', units)} (f "
+                     f"{format_value(cut / (2.0 * np.pi), 'frequency', units)}; no gap "
+                     "below it)")
     return lines
 
 

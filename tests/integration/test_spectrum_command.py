@@ -63,7 +63,9 @@ def test_the_command_writes_the_spectrum_its_figure_and_a_summary(cli, tmp_path)
     K = 1.5 * 0.5 ** (1 / 3)
     text = result.output
     assert text.startswith("run: N = 16 balls at rest, 16 modes: omega ")
-    assert f"band gap: {math.sqrt(K):.4g} ... {math.sqrt(2 * K):.4g}\n" in text
+    two_pi = 2 * math.pi
+    assert (f"band gap: {math.sqrt(K):.4g} ... {math.sqrt(2 * K):.4g} (f "
+            f"{math.sqrt(K) / two_pi:.4g} ... {math.sqrt(2 * K) / two_pi:.4g})\n") in text
     assert "periodic, 2 balls per cell; pass bands (omega): 0 ... " in text
     assert f"-> {Path('results/dimer/spectrum/run.h5')}, run.png, run.pdf" in text
 
@@ -75,7 +77,8 @@ def test_the_example_in_si(cli, tmp_path):
     assert ds.attrs["units"] == "SI" and ds.attrs["period"] == 2
     assert ds.omega.attrs["units"] == "rad/s"
     # stated in the units' prefixes, a gap in krad/s
-    assert re.search(r"band gap: [\d.]+ krad/s \.\.\. [\d.]+ krad/s", result.output)
+    assert re.search(r"band gap: [\d.]+ krad/s \.\.\. [\d.]+ krad/s \(f [\d.]+ kHz \.\.\. "
+                     r"[\d.]+ kHz\)", result.output)
     assert re.search(r"\(f [\d.]+ Hz \.\.\. [\d.]+ kHz\)", result.output)
     np.testing.assert_allclose(ds.static_force, 5.0, rtol=1e-12)  # walls' contacts too
     assert ds.contact.values.tolist() == list(range(21))
