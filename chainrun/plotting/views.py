@@ -117,7 +117,8 @@ def describe(run, varying=(), width: int | None = None) -> str:
     config = run.parameters.get("config_resolved", {}).get("chain", {})
     parts = []
     if line.diameter is not None:
-        names = sorted(set(np.asarray(line.material).tolist()) - {""})
+        # in the line's order (a steel and glass dimer, not glass and steel)
+        names = [m for m in dict.fromkeys(np.asarray(line.material).tolist()) if m]
         d = np.asarray(line.diameter)
         size = _drawn(config.get("diameter"), "diameter", units) or (
             format_value(float(d[0]), "diameter", units) if np.all(d == d[0])
