@@ -262,6 +262,9 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
         raise ChainrunError(f"magnify {magnify}: must be a positive number")
     run = read_run(path)
     first, last = balls if balls is not None else (1, min(run.n, MAX_BALLS))
+    if first > last:
+        raise ChainrunError(f"balls {first}:{last}: the first is after the last (give "
+                            f"FIRST:LAST, e.g. {last}:{first})")
     if not 1 <= first <= last <= run.n:
         raise ChainrunError(f"balls {first}:{last}: not within 1:{run.n}")
     frames = _frames(run)

@@ -211,6 +211,7 @@ def test_what_cannot_be_made_is_refused_in_one_line(run_file, tmp_path, monkeypa
     runner = CliRunner()
     cases = [(["-o", str(tmp_path / "m.avi")], "a movie is .gif or .mp4"),
              (["-o", str(tmp_path / "m.gif"), "--balls", "3:99"], "not within 1:8"),
+             (["-o", str(tmp_path / "m.gif"), "--balls", "5:2"], "the first is after the last"),
              (["-o", str(tmp_path / "m.gif"), "--balls", "three"], "expected FIRST:LAST"),
              (["-o", str(tmp_path / "m.gif"), "--magnify", "0"], "magnify 0.0: must be"),
              (["-o", str(tmp_path / "m.gif"), "--magnify", "nan"], "magnify nan: must be")]
