@@ -224,8 +224,11 @@ def load_experiment(path: str | os.PathLike[str], *, to_run: bool = True) -> Exp
     source = os.fspath(path)
     suffix = os.path.splitext(source)[1].lower()
     if suffix not in FORMATS:
+        what = (" (a run file or analysis file: an experiment file is expected here)"
+                if suffix == ".h5" else "")
         raise ConfigError(
-            source, [f"unknown file type {suffix or '(none)'!r} (expected .toml, .yaml or .yml)"]
+            source, [f"unknown file type {suffix or '(none)'!r}{what} (expected .toml, "
+                     ".yaml or .yml)"]
         )
     try:
         with open(source, encoding="utf-8-sig") as handle:  # a BOM (Windows editors) is dropped

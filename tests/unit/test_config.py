@@ -450,3 +450,13 @@ def test_module_is_free_of_click():
     package = Path(__file__).resolve().parents[2] / "chainrun" / "config"
     for path in package.glob("*.py"):
         assert "click" not in path.read_text(), path
+
+
+def test_a_run_file_given_for_an_experiment_is_named_as_such(tmp_path):
+    path = tmp_path / "run.h5"
+    path.write_bytes(b"")
+    with pytest.raises(ConfigError) as info:
+        load_experiment(path)
+    assert info.value.problems == [
+        "unknown file type '.h5' (a run file or analysis file: an experiment file is "
+        "expected here) (expected .toml, .yaml or .yml)"]
