@@ -62,6 +62,7 @@ def _hertz(axes, scaled, omega: np.ndarray, units: str) -> None:
     ratio = in_hertz(1.0) / scaled(1.0) / (2.0 * np.pi)  # f drawn per omega drawn
     axis = axes.secondary_yaxis("right", functions=(lambda w: w * ratio,
                                                     lambda f: f / ratio))
+    axes.tick_params(axis="y", which="both", right=False)  # (the f axis's ticks only)
     axis.set_ylabel(label)
     axis.set_gid("frequency")
 
