@@ -124,6 +124,19 @@ def check_str(value: Any) -> str:
 # --- pydantic errors -> one-line problems -------------------------------------------------
 
 
+def _nested(loc: tuple[str, ...], choices: list[str]) -> str:
+    """Where an unknown key joins a key of its table and one inside it with ``_``
+    (``motion_frequency`` for ``motion.frequency``), that dotted key as a suggestion;
+    else ""."""
+    head, _, rest = loc[-1].partition("_")
+    while rest:
+        if head in choices:
+            return f" (did you mean '{'.'.join(loc[:-1] + (head, rest))}'?)"
+        more, _, rest = rest.partition("_")
+        head = f"{head}_{more}"
+    return ""
+
+
 def _elsewhere(loc: tuple[str, ...], models: Mapping[tuple[str, ...], type[BaseModel]]) -> str:
     """Where an unknown key is a key of another table (``chain.sensors`` is
     ``output.sensors``, a top-level ``n`` is ``chain.n``), as a suggestion; else ""."""
@@ -161,7 +174,9 @@ def translate(exc: ValidationError, models: Mapping[tuple[str, ...], type[BaseMo
         elif kind == "extra_forbidden":
             model = models.get(loc[:-1])
             choices = list(model.model_fields) if model else []
-            reason = f"unknown key{suggest(loc[-1], choices) or _elsewhere(loc, models)}"
+            hint = (suggest(loc[-1], choices) or _nested(loc, choices)
+                    or _elsewhere(loc, models))
+            reason = f"unknown key{hint}"
         elif kind == "invalid_key":
             key = ".".join(loc[:-1]) or "top level"
             reason = f"unknown key {show_value(error['loc'][-1])} (keys must be text)"

@@ -98,6 +98,13 @@ def test_a_key_in_the_wrong_table_is_pointed_to_its_own():
         "n: unknown key (did you mean 'chain.n'?)"]
 
 
+def test_a_nested_key_joined_by_an_underscore_is_pointed_to_its_dotted_name():
+    text = ('name = "x"\n[chain]\nn = 3\nk = 0\nalpha = 1.0\n[walls.left]\n'
+            'motion_frequency = 2000.0\n[walls.right]\n[solver]\nt_end = 1.0\n')
+    assert problems(text) == [
+        "walls.left.motion_frequency: unknown key (did you mean 'walls.left.motion.frequency'?)"]
+
+
 def test_a_key_that_cannot_be_swept_is_not_called_unknown():
     (line,) = problems(CHAIN + '[sweep]\n"walls.left.material" = ["steel", "glass"]\n')
     assert line.startswith("sweep: 'walls.left.material' cannot be swept (of walls.left, "
