@@ -65,6 +65,17 @@ def summary(ds) -> list[str]:
     return lines
 
 
+def _numbers_hash(ds) -> str:
+    """sha256 of a spectrum's numbers (its variables and coordinates, not its
+    attributes, which name the run)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for name in sorted(ds.variables):
+        h.update(name.encode() + b"\0" + np.ascontiguousarray(ds[name].values).tobytes())
+    return h.hexdigest()
+
+
 @click.command()
 @click.argument("config", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--outdir", type=click.Path(file_okay=False, path_type=Path),
@@ -88,8 +99,9 @@ def spectrum(config: Path, outdir: Path | None, period: int | None):
     frequency per mode, ascending, in the inverse of the file's time unit; the mode
     shapes; the contacts' static compression, force and linear stiffness; for a
     periodic line the dispersion and band edges) and its figure to
-    OUTDIR/<run_id>.png and .pdf. chainrun.spectrum(...) gives the same Dataset in
-    Python.
+    OUTDIR/<run_id>.png and .pdf; a run of a sweep whose line at rest is an earlier
+    run's (a sweep of its drive) is said to be, and written once. chainrun.spectrum(...)
+    gives the same Dataset in Python.
 
     \b
     Examples:
@@ -113,11 +125,18 @@ def spectrum(config: Path, outdir: Path | None, period: int | None):
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         fail(f"{outdir}: cannot create the output folder ({exc.strerror})")
+    written: dict[str, tuple[str, Path]] = {}  # the numbers' hash: the first run, its file
     for spec in experiment.runs(to_run=False):
         where = f"{config}: " + (f"run {spec.run_id}: " if experiment.sweep else "")
         try:
             ds = run_spectrum(spec, period=period)
+            same = written.get(_numbers_hash(ds))
+            if same is not None:  # (a sweep of what drives the line, not of the line)
+                click.echo(f"{spec.run_id}: the same line at rest as {same[0]}, the same "
+                           f"spectrum: {same[1]}")
+                continue
             path = outdir / f"{spec.run_id}.h5"
+            written[_numbers_hash(ds)] = (spec.run_id, path)
             write_spectrum(path, ds)
             figures = render_spectrum(path, out=outdir)
         except ConfigError as exc:  # the line's values, checked as it is built

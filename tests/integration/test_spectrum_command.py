@@ -98,6 +98,23 @@ def test_a_sweep_gives_a_file_per_run_and_a_tree(cli, tmp_path):
     np.testing.assert_allclose(high.omega / low.omega, 8 ** (1 / 6), rtol=1e-12)
 
 
+def test_a_sweep_of_the_drive_alone_writes_its_one_spectrum_once(cli, tmp_path):
+    config = tmp_path / "shaken.toml"
+    config.write_text(DIMER + "[walls.left.motion]\namplitude = 1e-4\nfrequency = 0.1\n"
+                      "ramp = 10.0\n[solver]\nt_end = 50.0\n"
+                      '[sweep]\n"walls.left.motion.frequency" = [0.1, 0.2, 0.3]\n')
+    result = cli("spectrum", config, "-o", "out")
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.h5")) == [
+        "left_motion_frequency=0.1.h5"]
+    for f in (0.2, 0.3):
+        assert (f"left_motion_frequency={f}: the same line at rest as "
+                f"left_motion_frequency=0.1, the same spectrum") in result.output
+    tree = chainrun.spectrum(config)  # (Python: every run's, as its tree)
+    np.testing.assert_array_equal(tree["left_motion_frequency=0.3"].to_dataset().omega,
+                                  tree["left_motion_frequency=0.1"].to_dataset().omega)
+
+
 @pytest.mark.parametrize("text, args, message", [
     (DIMER.replace("alpha = 1.5", "alpha = 0.5"), (),
      "dimer.toml: chain.alpha: must be >= 1, got 0.5"),
