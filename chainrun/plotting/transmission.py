@@ -88,10 +88,11 @@ def draw_transmission(ds, title: str = "") -> Figure:
         handles.insert(i, line)
         loose = ~steady.sel(sensor=ball).values
         if loose.any():  # the same markers, hollow: not a transmitted signal
+            # (its colour given: one taken from the cycle would shift the next sensors')
             axes.plot(x[loose], t.sel(sensor=ball).values[loose], linestyle="none",
                       marker=line.get_marker(), markersize=line.get_markersize() + 1,
-                      markerfacecolor="white", markeredgecolor=line.get_color(),
-                      gid=f"not_steady/{ball}")
+                      color=line.get_color(), markerfacecolor="white",
+                      markeredgecolor=line.get_color(), gid=f"not_steady/{ball}")
     if not bool(steady.all()):
         rule = steady.attrs
         handles.append(Line2D([], [], linestyle="none", marker="o", markersize=5,

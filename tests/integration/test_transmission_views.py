@@ -71,6 +71,16 @@ def test_the_figure_draws_the_measured_curve_and_the_bands(sweep):
     # transient is most of its signal
     assert not curve.steady.sel(sensor=10, frequency=0.45)
     assert curve.steady.sel(sensor=1, frequency=0.45)
+    # each sensor in its colour of the run's own sensors view, hollow points or not
+    from chainrun.plotting.views import draw_view
+    from chainrun.store import read_run
+
+    with style(colour=True):
+        own = draw_view(read_run(sweep / "left_motion_frequency=0.2.h5"), "sensors")
+    colours = {a.get_gid(): a.get_color() for a in own.axes[0].get_lines() if a.get_gid()}
+    assert any((~curve.steady.sel(sensor=ball)).any() for ball in curve.sensor.values[:-1])
+    for ball in curve.sensor.values:
+        assert drawn[f"transmission/{ball}"].get_color() == colours[f"sensor/{ball}"], ball
 
 
 @pytest.mark.slow
