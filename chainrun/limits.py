@@ -16,7 +16,8 @@ Disk (``estimate_file_size``) counts the snapshots before compression, ``T * N *
 bytes for positions and velocities, plus the per-ball results. Compression often
 shrinks this a lot (balls at rest compress to almost nothing), so a file larger than
 the free space is reported as a warning, not refused; so is output above
-``LARGE_OUTPUT`` (1 GiB), with what would keep it small.
+``LARGE_OUTPUT`` (1 GiB), with what would keep it small. While it writes, the run file
+stops the run before it fills the disk (``chainrun.store.run_writer.DISK_RESERVE``).
 """
 
 from __future__ import annotations

@@ -41,6 +41,7 @@ from chainrun.errors import StoreError
 from chainrun.solver import Drive, EventKind, Solution
 from chainrun.store import _h5
 from chainrun.store._h5 import BALL_CHUNK, GZIP, RUN_FORMAT
+from chainrun.limits import free_disk, human_size
 from chainrun.units import UNITS, law_unit
 
 if TYPE_CHECKING:  # the config parser (pydantic, YAML) is not needed to write files
@@ -52,6 +53,10 @@ H5MD_VERSION = (1, 1)
 #: written together: one by one, a snapshot of a short line costs some twenty HDF5
 #: calls, most of a short run's time. A larger snapshot is written when it is taken.
 SNAPSHOT_BUFFER = 2**20
+#: the free space checked after every this many bytes of snapshots written
+DISK_CHECK_BYTES = 2**26
+#: a run stops (its file discarded) rather than leave less than this free on its disk
+DISK_RESERVE = 10**9
 
 #: The observables written at each snapshot, with their description and unit.
 OBSERVABLES = {
@@ -157,6 +162,7 @@ class RunWriter:
         self._n = int(spec.n)
         self._units = getattr(spec, "units", "paper")
         self._pending_bytes = 0
+        self._unchecked_bytes = 0
         self._done = False
         self._h5: h5py.File | None = _h5.create(self.path, self.temp_path, "run file")
         try:
@@ -324,7 +330,24 @@ class RunWriter:
     def _flush(self) -> None:
         for element in (self._position, self._velocity, *self._observables.values()):
             element.flush()
+        self._unchecked_bytes += self._pending_bytes
         self._pending_bytes = 0
+        if self._unchecked_bytes >= DISK_CHECK_BYTES:
+            self._unchecked_bytes = 0
+            self._check_disk()
+
+    def _check_disk(self) -> None:
+        """Stop the run before its file fills the disk: a ``StoreError`` (the file is
+        then discarded) where less than ``DISK_RESERVE`` is left. Before the run, the
+        estimate only warns (``chainrun.limits``): it counts every snapshot before
+        compression, and balls at rest take no room."""
+        free = free_disk(self.temp_path.parent)
+        if free is not None and free < DISK_RESERVE:
+            raise StoreError(
+                f"{self.path}: stopped before the disk fills: {human_size(free)} left "
+                f"(chainrun keeps {human_size(DISK_RESERVE)} free) after "
+                f"{self._position.rows} snapshots; fewer output.times, or another "
+                f"output folder (-o), would fit")
 
     def finish(self, solution: Solution, check: Check | None = None) -> None:
         """Write results, events and diagnostics (and the ``check``'s spreads, if
