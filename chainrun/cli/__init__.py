@@ -17,11 +17,10 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import atexit
 import gc
-import signal
 
 import click
 
-from chainrun import __version__
+from chainrun import __version__, interrupt
 from chainrun.cli.common import Commands
 from chainrun.cli.analyze import analyze
 from chainrun.cli.animate import animate
@@ -63,11 +62,10 @@ def main():
     atexit.register(gc.freeze)
     # A terminated run (a job's time limit, `timeout`, a closed terminal's SIGHUP) is an
     # interrupted one: the files being written are discarded, not left half-written
-    # beside the finished ones, and the command says how far it got.
-    for name in ("SIGTERM", "SIGHUP"):
-        number = getattr(signal, name, None)
-        if number is not None and signal.getsignal(number) is signal.SIG_DFL:
-            signal.signal(number, signal.default_int_handler)
+    # beside the finished ones, and the command says how far it got. An interrupt that
+    # lands in a callback whose exceptions Python ignores is raised again at the run's
+    # next snapshot (chainrun.interrupt).
+    interrupt.install()
 
 
 main.add_command(simulate)

@@ -6,6 +6,8 @@ import sys
 
 import click
 
+from chainrun import interrupt
+
 EXIT_FAILED_RUNS = 1
 EXIT_BAD_INPUT = 2
 #: interrupted (SIGINT, or SIGTERM and SIGHUP, which the command group makes the same)
@@ -27,4 +29,5 @@ class Commands(click.Group):
         try:
             return super().invoke(ctx)
         except KeyboardInterrupt:
+            interrupt.clear()
             fail("interrupted", EXIT_INTERRUPTED)

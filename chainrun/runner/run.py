@@ -9,6 +9,7 @@ from typing import Callable
 
 import numpy as np
 
+from chainrun import interrupt
 from chainrun.check import Check
 from chainrun.config import RunSpec
 from chainrun.errors import StoreError
@@ -42,6 +43,7 @@ def recorder(writer, line):
     """The solver's ``on_snapshot`` hook that writes each snapshot of ``line`` and its
     ``observables`` with ``writer`` (a ``chainrun.store.RunWriter``)."""
     def on_snapshot(index: int, t: float, x: np.ndarray, v: np.ndarray) -> None:
+        interrupt.check()  # (one the writing's callbacks swallowed stops the run here)
         writer.snapshot(index, t, x, v, observables(line, t, x, v))
     return on_snapshot
 
@@ -93,7 +95,11 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     # numba loads the kernels on their first call; the run's wall time is its solve's
     load_kernels()
     path = run_file(Path(outdir), spec)
-    hook = None if on_progress is None else (lambda t: on_progress(spec.run_id, t))
+
+    def hook(t: float) -> None:
+        interrupt.check()
+        if on_progress is not None:
+            on_progress(spec.run_id, t)
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
         sol = simulate(
             line, spec.times, t_end=spec.t_end, rtol=spec.rtol,

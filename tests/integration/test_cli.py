@@ -294,3 +294,49 @@ def test_analyze_points_a_run_of_ones_own_to_info_and_plot(cli, tmp_path):
     result = cli("analyze", run)
     assert result.exit_code == 2 and len(result.stderr.strip().splitlines()) == 1
     assert f"chainrun info {run}" in result.stderr and f"chainrun plot {run}" in result.stderr
+
+
+def test_an_interrupt_a_callback_swallowed_stops_the_run_at_its_next_snapshot(tmp_path):
+    # the handler the command line installs raises KeyboardInterrupt and remembers it;
+    # where the raise lands in a callback whose exceptions Python ignores (h5py's weak
+    # references, while a snapshot is written), the run's next snapshot raises it again,
+    # and its file is discarded
+    import signal
+
+    from chainrun import interrupt
+    from chainrun.config import parse_experiment
+
+    (spec,) = parse_experiment('name = "x"\n[chain]\nn = 30\nk = 1\nalpha = 1.5\n'
+                               "[output]\ntimes = {start = 0, stop = 40, step = 1}\n",
+                               "toml").runs()
+    previous = signal.getsignal(signal.SIGINT)
+    interrupt.install()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            signal.raise_signal(signal.SIGINT)  # (raised here, and "swallowed" below)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    with pytest.raises(KeyboardInterrupt):
+        runner.simulate_run(spec, tmp_path)
+    assert not list(tmp_path.glob("*.h5")) and not list(tmp_path.glob(".*partial*"))
+    interrupt.check()  # acted on: forgotten
+    runner.simulate_run(spec, tmp_path)
+    assert (tmp_path / "run.h5").is_file()
+
+
+def test_a_run_stops_before_its_file_fills_the_disk(tmp_path, monkeypatch):
+    from chainrun.config import parse_experiment
+    from chainrun.errors import StoreError
+    from chainrun.store import run_writer
+
+    (spec,) = parse_experiment('name = "x"\n[chain]\nn = 3000\nk = 1\nalpha = 1.5\n'
+                               "[output]\ntimes = {start = 0, stop = 400, step = 1}\n",
+                               "toml").runs()
+    monkeypatch.setattr(run_writer, "DISK_CHECK_BYTES", 2**20)  # a check every 1 MiB
+    monkeypatch.setattr(run_writer, "free_disk", lambda folder: 2**29)  # 512 MiB left
+    with pytest.raises(StoreError, match=r"stopped before the disk fills: 536.9 MB left "
+                                         r"\(chainrun keeps 1.0 GB free\) after \d+ snapshots"):
+        runner.simulate_run(spec, tmp_path)
+    assert not list(tmp_path.iterdir())  # the partial file discarded

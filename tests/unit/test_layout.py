@@ -18,6 +18,7 @@ RANK = {
     "chainrun.materials": 0,  # data only
     "chainrun.units": 0,
     "chainrun.paths": 0,  # names of folders and files only
+    "chainrun.interrupt": 0,  # the signals' handler and its flag
     "chainrun.solver": 1, "chainrun.generators": 1, "chainrun.check": 1,
     "chainrun.config": 2, "chainrun.limits": 2, "chainrun.artefacts": 2,
     "chainrun.store": 3,
