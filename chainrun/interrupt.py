@@ -13,26 +13,28 @@ from __future__ import annotations
 
 import signal
 
-__all__ = ["check", "install"]
+__all__ = ["check", "clear", "handler", "install"]
 
 _pending = False
 
 
-def _handler(signum, frame):
+def handler(signum, frame):
+    """Remember the interrupt, and raise it now."""
     global _pending
     _pending = True
     raise KeyboardInterrupt
 
 
 def install() -> None:
-    """Handle SIGINT, SIGTERM and SIGHUP so (a terminated run, by a job's time limit,
-    `timeout` or a closed terminal, is an interrupted one), where Python's or the
-    system's default handles them now."""
+    """Handle SIGINT, SIGTERM and SIGHUP with ``handler`` (a terminated run, by a job's
+    time limit, `timeout` or a closed terminal, is an interrupted one), where Python's
+    or the system's default handles them now: a signal the process was started to
+    ignore (a background job's SIGINT) stays ignored."""
     for name in ("SIGINT", "SIGTERM", "SIGHUP"):
         number = getattr(signal, name, None)
         if number is not None and signal.getsignal(number) in (
                 signal.SIG_DFL, signal.default_int_handler):
-            signal.signal(number, _handler)
+            signal.signal(number, handler)
 
 
 def check() -> None:

@@ -309,8 +309,7 @@ def test_an_interrupt_a_callback_swallowed_stops_the_run_at_its_next_snapshot(tm
     (spec,) = parse_experiment('name = "x"\n[chain]\nn = 30\nk = 1\nalpha = 1.5\n'
                                "[output]\ntimes = {start = 0, stop = 40, step = 1}\n",
                                "toml").runs()
-    previous = signal.getsignal(signal.SIGINT)
-    interrupt.install()
+    previous = signal.signal(signal.SIGINT, interrupt.handler)  # (as the command's)
     try:
         with pytest.raises(KeyboardInterrupt):
             signal.raise_signal(signal.SIGINT)  # (raised here, and "swallowed" below)
