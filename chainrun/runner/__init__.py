@@ -267,6 +267,8 @@ def simulate_experiment(
     except BaseException:
         if own:
             executor.shutdown(wait=False, cancel_futures=True)
+            _remove_partials_of(getattr(executor, "killed", ()), outdir, specs,
+                                check_outdir)
         raise
     if own:
         executor.shutdown()
@@ -287,6 +289,24 @@ def simulate_experiment(
     if check_outdir is not None:
         _write_check_index(check_outdir, experiment.name, checked)
     return SweepResult(runs=runs, index=index, workers=workers)
+
+
+def _remove_partials_of(pids, outdir: Path, specs: list[RunSpec],
+                        check_outdir: Path | None) -> None:
+    """Remove the half-written run files of the worker processes ``pids``, killed by
+    an interrupted sweep (a run computed in this process removes its own)."""
+    if not pids:
+        return
+    ends = tuple(f".partial-{pid}" for pid in pids)
+    leftovers = partial_files(outdir, specs)
+    if check_outdir is not None:
+        leftovers += partial_files(check_outdir, [s.for_check() for s in specs])
+    for path in leftovers:
+        if path.name.endswith(ends):
+            try:
+                path.unlink()
+            except OSError:
+                pass
 
 
 def _write_check_index(check_outdir: Path, name: str, checked: list[RunSpec]) -> None:

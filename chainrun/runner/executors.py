@@ -76,6 +76,9 @@ class DaskExecutor(cf.Executor):
         self.cluster = cluster
         self._executor = client.get_executor(pure=True)
         self._slots = (0.0, 1)
+        #: the worker processes an interrupted sweep killed (``shutdown``): their
+        #: half-written files are removed by the sweep
+        self.killed: set[int] = set()
         address = client.scheduler.address
         self.workers = (f"on a local Dask cluster of {len(cluster.workers)} workers"
                         if cluster is not None else f"on the Dask scheduler at {address}")
@@ -156,6 +159,8 @@ class DaskExecutor(cf.Executor):
                         os.kill(pid, signal.SIGKILL)
                     except OSError:
                         pass
+                    else:
+                        self.killed.add(pid)
         try:
             if hurry:
                 self._executor.shutdown(wait=False)

@@ -7,6 +7,7 @@ client, the scheduler and the workers are as separate as on a real cluster.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import os
 import shutil
 import signal
@@ -245,6 +246,31 @@ def test_an_interrupted_sweep_resumes_and_loses_no_finished_run(tmp_path, monkey
     assert "2 computed" in resumed.stderr and "2 skipped" in resumed.stderr
     assert {k: stamps(out)[k] for k in before} == before
     assert_index_whole(out, config, ["k=1", "k=2", "k=3", "k=4"])
+
+
+def test_an_interrupted_sweep_removes_the_files_its_killed_workers_left(tmp_path,
+                                                                       monkeypatch):
+    # a local cluster's workers are killed on an interrupt, midway through writing;
+    # their half-written files go, and a file another process writes stays
+    config = write(tmp_path / "small.toml", SMALL.format(ks="[1, 2]"))
+    out = tmp_path / "out"
+
+    class Killed(cf.Executor):
+        workers = "on two killed workers"
+        killed: set = set()
+
+        def submit(self, fn, /, *args, **kwargs):
+            (out / ".k=1.h5.partial-4242").write_bytes(b"\x89HDF half")
+            (out / ".k=2.h5.partial-4343").write_bytes(b"\x89HDF half")
+            raise KeyboardInterrupt
+
+        def shutdown(self, wait=True, *, cancel_futures=False):
+            self.killed = {4242}
+
+    monkeypatch.setattr(runner, "open_executor", lambda **kwargs: Killed())
+    with pytest.raises(KeyboardInterrupt):
+        runner.simulate_experiment(load_experiment(config), out, jobs=2)
+    assert partials(out) == [".k=2.h5.partial-4343"]
 
 
 def test_a_run_that_raises_does_not_stop_the_others(tmp_path, monkeypatch):
