@@ -193,6 +193,9 @@ class _SweepBar:
     """One progress line over the sweep on stderr, drawn only on a terminal.
 
     ``[#####.....] 12/40 done 8, running 2, failed 1, skipped 3; 0:42 k=2 t = 12.5``
+    (counts of zero left out; a single run shows only its clock and its simulated
+    time, which is what moves). On a narrow terminal the bar goes first, then the
+    counts, then the count of runs finished, so that the time stays.
 
     Redrawn at most ten times a second, and only when the line changes.
     """
@@ -226,22 +229,35 @@ class _SweepBar:
         if self.shown and now - self.drawn_at < 0.1:
             return
         self.drawn_at = now
-        c = self.counts
-        filled = self.WIDTH * c.finished // max(c.total, 1)
-        minutes, seconds = divmod(int(now - self.started), 60)
-        line = (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] {c.finished}/{c.total} "
-                f"done {c.done}, running {c.running}, failed {c.failed}, "
-                f"skipped {c.skipped}; {minutes}:{seconds:02d}")
-        current = self.current or c.current
-        if current:
-            line += f" {current}"
-        line = line[: shutil.get_terminal_size().columns - 1]
+        line = self.text(self.counts, self.current, now - self.started,
+                         shutil.get_terminal_size().columns - 1)
         if self.shown and line == self.line:
             return
         self.line = line
         sys.stderr.write("\r\x1b[K" + line)
         sys.stderr.flush()
         self.shown = True
+
+    @classmethod
+    def text(cls, c, current: str, elapsed: float, columns: int) -> str:
+        """The line for counts ``c``, within ``columns`` characters."""
+        minutes, seconds = divmod(int(elapsed), 60)
+        tail = f"{minutes}:{seconds:02d}"
+        current = current or c.current
+        if current:
+            tail += f" {current}"
+        if c.total == 1:
+            return tail[:columns]
+        filled = cls.WIDTH * c.finished // max(c.total, 1)
+        bar = f"[{'#' * filled}{'.' * (cls.WIDTH - filled)}] "
+        counts = [f"done {c.done}", f"running {c.running}"] + [
+            f"{name} {n}" for name, n in (("failed", c.failed), ("skipped", c.skipped)) if n]
+        for line in (f"{bar}{c.finished}/{c.total} {', '.join(counts)}; {tail}",
+                     f"{c.finished}/{c.total} {', '.join(counts)}; {tail}",
+                     f"{c.finished}/{c.total}; {tail}", tail):
+            if len(line) <= columns:
+                return line
+        return line[:columns]
 
     def clear(self) -> None:
         if self.shown:

@@ -181,8 +181,9 @@ def simulate_experiment(
         Where to compute; see ``open_executor``.
     executor : concurrent.futures.Executor, optional
         Use this executor instead (not shut down here).
-    on_progress : callable(run_id, t), optional
-        Simulated time of a run computed in this process.
+    on_progress : callable(label, t), optional
+        Simulated time of a run computed in this process; the label is its run_id,
+        with " (check)" after it while its check runs (``ProgressHook``).
     on_run_done : callable(RunSummary or RunError), optional
         Called for each run as it is skipped, finishes or fails.
     on_update : callable(SweepProgress), optional

@@ -16,6 +16,9 @@ from chainrun.errors import StoreError
 from chainrun.paths import run_file
 from chainrun.runner.results import RunSummary
 
+#: ``on_progress(label, t)``: the simulated time t of a run computed in this process;
+#: the label is the run's id, and while its check runs (``solver.check``), the id
+#: followed by " (check)", whose time starts again from 0
 ProgressHook = Callable[[str, float], None]
 
 
@@ -96,10 +99,12 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
     load_kernels()
     path = run_file(Path(outdir), spec)
 
+    label = spec.run_id
+
     def hook(t: float) -> None:
         interrupt.check()
         if on_progress is not None:
-            on_progress(spec.run_id, t)
+            on_progress(label, t)
     with RunWriter(path, spec, velocity_floor=velocity_floor(spec.rtol)) as writer:
         sol = simulate(
             line, spec.times, t_end=spec.t_end, rtol=spec.rtol,
@@ -108,6 +113,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         )
         check = None
         if (spec.check or check_outdir is not None) and sol.outcome.ok:
+            label = f"{spec.run_id} (check)"
             check = _check(spec, line, sol, check_outdir, hook)
         writer.finish(sol, check)
     d = sol.diagnostics

@@ -288,6 +288,40 @@ def test_the_velocity_table_keeps_three_digits_of_small_velocities():
         "-2.4881", "-0.3036", "-0.0213", "-0.00973", "-0.000664", "0.0000"]
 
 
+@pytest.mark.parametrize("columns", [200, 79, 40, 24])
+def test_the_progress_line_keeps_the_time_that_moves(columns):
+    """On any terminal width, the simulated time of the run computing (the one number
+    that moves during a long run) is on the line, whole; counts of zero are left out."""
+    from chainrun.cli.simulate import _SweepBar
+    from chainrun.runner import SweepProgress
+
+    one = _SweepBar.text(SweepProgress(total=1, running=1), "run t = 1.235e+05", 62.0,
+                         columns)
+    assert one == "1:02 run t = 1.235e+05"[:columns]
+    many = _SweepBar.text(SweepProgress(total=40, done=8, running=2, skipped=3),
+                          "speed=3.0 (check) t = 0.01234", 62.0, columns)
+    assert len(many) <= columns
+    if columns >= 79:
+        assert many.endswith("11/40 done 8, running 2, skipped 3; 1:02 speed=3.0 (check) "
+                             "t = 0.01234") and "failed" not in many
+    if columns >= 40:
+        assert many.endswith("1:02 speed=3.0 (check) t = 0.01234")
+
+
+def test_a_checked_runs_progress_says_when_its_check_runs(tmp_path):
+    from chainrun.config import load_experiment
+
+    config = tmp_path / "checked.toml"
+    config.write_text('name = "checked"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n'
+                      '[output]\ntimes = [0.0, 1.0, 2.0]\n')
+    labels = []  # (each snapshot reports progress: the check run's too, with its files)
+    runner.simulate_experiment(load_experiment(config), tmp_path / "out",
+                               check_outdir=tmp_path / "check",
+                               on_progress=lambda label, t: labels.append(label))
+    assert labels[0] == "run" and labels[-1] == "run (check)"
+    assert set(labels) == {"run", "run (check)"}
+
+
 def test_analyze_points_a_run_of_ones_own_to_info_and_plot(cli, tmp_path):
     run = tmp_path / "mine.h5"
     run.write_bytes(b"")
