@@ -167,7 +167,9 @@ def _damping_of(prefix: str, spec: Dissipation, kappa: np.ndarray, alpha: np.nda
         needs = (spec.restitution < 1.0) & (beta != (alpha - 1.0) / 2.0)
         if spec.speed is None and np.any(needs):
             i = int(np.flatnonzero(needs)[0])
-            where = f"contact {i}, " if not prefix else ""
+            # (contacts numbered as the run file numbers them: contact j joins balls
+            # j and j + 1, counted from 1)
+            where = f"contact {i + 1}, balls {i + 1}-{i + 2}, " if not prefix else ""
             problems.append((f"{prefix}restitution_speed",
                              f"required: the restitution of the {law} law depends on the "
                              f"impact speed ({where}alpha = {_number(float(alpha[i]))}); give "

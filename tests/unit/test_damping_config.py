@@ -66,7 +66,16 @@ def test_kuwabara_kono_needs_and_uses_its_speed():
            'damping_law = "kuwabara-kono"\n'
     assert problems(text) == [
         "chain.restitution_speed: required: the restitution of the kuwabara-kono law "
-        "depends on the impact speed (contact 0, alpha = 1.5); give the speed it holds at"]
+        "depends on the impact speed (contact 1, balls 1-2, alpha = 1.5); give the speed "
+        "it holds at"]
+    # the first contact whose restitution depends on the speed, numbered as the run
+    # file numbers contacts (for Kuwabara-Kono, alpha = 2 holds e at every speed)
+    mixed = "[chain]\nn = 3\nk = 1\nalpha = [2.0, 1.5]\nrestitution = 0.7\n" \
+            'damping_law = "kuwabara-kono"\n'
+    assert problems(mixed) == [
+        "chain.restitution_speed: required: the restitution of the kuwabara-kono law "
+        "depends on the impact speed (contact 2, balls 2-3, alpha = 1.5); give the speed "
+        "it holds at"]
     slow = line_of(text + "restitution_speed = 0.1\n").damping[0]
     fast = line_of(text + "restitution_speed = 10.0\n").damping[0]
     # G = eta D^(3/2) / (mu v) fixed, D = (mu v^2 / kappa)^(2/5): eta ~ v^(-1/5)
@@ -158,7 +167,7 @@ def test_si_beads_with_restitution():
      ["chain.restitution_speed: must be > 0, got 0.0"]),
     (CHAIN + 'alpha = 1.5\nrestitution = 0.9\ndamping_law = "dashpot"\n',
      ["chain.restitution_speed: required: the restitution of the dashpot law depends on "
-      "the impact speed (contact 0, alpha = 1.5); give the speed it holds at"]),
+      "the impact speed (contact 1, balls 1-2, alpha = 1.5); give the speed it holds at"]),
     (CHAIN + "alpha = 1.5\n[walls.right]\nrestitution = 1.5\n",
      ["walls.right.restitution: must be <= 1, got 1.5"]),
     (CHAIN + "alpha = 1.5\n[walls.right]\ndamping = -0.1\n",
