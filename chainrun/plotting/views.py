@@ -109,11 +109,13 @@ def _drawn(table, quantity: str, units: str) -> str | None:
 
 def describe(run, varying=(), width: int | None = None) -> str:
     """What the line of a run is, in a line: its balls (material, diameter), strikers
-    and speed, contact law, walls, precompression and damping; what the swept keys
+    and speed, contact law, the balls' damping, each wall with its own, and
+    precompression; what the swept keys
     ``varying`` set is left out (it differs from run to run). With ``width``, wrapped
     into lines of about that many characters between its parts."""
     line, units = run.line, run.units
-    varying = {key.rpartition(".")[2] for key in varying}
+    swept = set(varying)
+    varying = {key.rpartition(".")[2] for key in swept if key.startswith("chain.")}
     config = run.parameters.get("config_resolved", {}).get("chain", {})
     parts = []
     if line.diameter is not None:
@@ -145,18 +147,31 @@ def describe(run, varying=(), width: int | None = None) -> str:
                      else f"K = {k}")
     if line.n > 1:
         parts.append(_law(np.asarray(line.alpha)))
-    walls = [side for side, w in (("left", line.left), ("right", line.right)) if w]
-    if walls:
-        parts.append(f"wall{'s' if len(walls) > 1 else ''} {' and '.join(walls)}")
+    # the balls' damping before the walls, each wall with its own
+    if "restitution" in config:
+        if "restitution" not in varying:
+            parts.append(_restitution(config["restitution"], config.get("damping_law", "")))
+    elif np.any(np.asarray(line.damping) != 0.0) and "damping" not in varying:
+        parts.append("damped")
+    walls = run.parameters.get("config_resolved", {}).get("walls", {})
+    sides = {}
+    for side, wall in (("left", line.left), ("right", line.right)):
+        if not wall:
+            continue
+        table = walls.get(side, {}) if isinstance(walls, dict) else {}
+        if f"walls.{side}.restitution" in swept:
+            sides[side] = ""
+        elif "restitution" in table:
+            sides[side] = " (" + _restitution(table["restitution"],
+                                                table.get("damping_law", ""), True) + ")"
+        else:
+            sides[side] = " (damped)" if wall.damping > 0.0 else ""
+    if len(sides) == 2 and len(set(sides.values())) == 1:
+        parts.append(f"walls left and right{sides['left']}")
+    else:
+        parts += [f"wall {side}{how}" for side, how in sides.items()]
     if "precompression" in config and "precompression" not in varying:
         parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
-    if "restitution" in config and "restitution" not in varying:
-        e = config["restitution"]
-        law = config.get("damping_law", "")
-        law = {"tsuji": "Tsuji", "kuwabara-kono": "Kuwabara-Kono"}.get(law, law)
-        parts.append(f"restitution {e if isinstance(e, (int, float)) else 'varied'} ({law})")
-    elif line.is_damped:
-        parts.append("damped")
     parts = [p for p in parts if p]
     if width is None:
         return ", ".join(parts)
@@ -168,6 +183,14 @@ def describe(run, varying=(), width: int | None = None) -> str:
         else:
             lines[-1] += ", " + part
     return "\n".join(lines)
+
+
+def _restitution(e, law: str, inside: bool = False) -> str:
+    """``restitution 0.9 (Tsuji)``: a coefficient of restitution and its law
+    (``restitution 0.9, Tsuji`` ``inside`` parentheses)."""
+    law = {"tsuji": "Tsuji", "kuwabara-kono": "Kuwabara-Kono"}.get(law, law)
+    law = "" if not law else f", {law}" if inside else f" ({law})"
+    return f"restitution {e if isinstance(e, (int, float)) else 'varied'}{law}"
 
 
 def _title(run, width: int = 72) -> str:

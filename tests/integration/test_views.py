@@ -302,6 +302,27 @@ def test_an_si_run_is_drawn_in_si_with_readable_prefixes(beads):
     assert "300 mm/s" in figures["final"].axes[0].get_title()
 
 
+def test_a_title_gives_each_wall_its_own_restitution(beads):
+    # the balls' restitution comes before the walls, so that it is not read as a wall's
+    import copy
+    from types import SimpleNamespace
+
+    from chainrun.plotting.views import describe
+
+    assert describe(beads).endswith("restitution 0.8 (Tsuji), wall right")
+    parameters = copy.deepcopy(beads.parameters)
+    parameters["config_resolved"]["walls"]["right"].update(restitution=0.5,
+                                                          damping_law="tsuji")
+    run = SimpleNamespace(line=beads.line, units=beads.units, parameters=parameters)
+    assert describe(run).endswith(
+        "restitution 0.8 (Tsuji), wall right (restitution 0.5, Tsuji)")
+    # swept, a wall's restitution is left out, and the balls' stays
+    assert describe(run, ["walls.right.restitution"]).endswith(
+        "restitution 0.8 (Tsuji), wall right")
+    assert describe(run, ["chain.restitution"]).endswith(
+        "K = 1 at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
+
+
 def test_curves_differ_in_colour_and_style_and_ball_axes_are_whole_numbers(beads):
     with style(colour=True):
         profiles = draw_view(beads, "profiles")
