@@ -7,7 +7,10 @@ tolerance when the tolerance changes, while a clean line's hold to about ``rtol`
 The check runs the same line a second time at another tolerance (``check_rtol``: a
 tenth of the run's) and takes, for every ball, the difference of the two runs' final
 and separation velocities: the *spread*. A spread measures how much of the number is
-set by the model and how much by rounding and tolerance; a ball *holds* when both
+set by the model and how much by rounding and tolerance; it estimates the run's error
+and does not bound it (the check run has an error of its own, about a tenth as large
+where errors follow the tolerance: the run's is then about 1.1 times its spread, as
+the guide's "Which digits hold" measures). A ball *holds* when both
 its spreads are at most ``HOLD`` of the line's impact speed (the largest initial
 speed), in the run's units.
 

@@ -143,7 +143,8 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
 
     A spread of 0 (or NaN: not measured) leaves ``value`` at ``digits`` significant
     digits (``.6g``). Otherwise the last digit kept is the one whose unit is at least
-    the spread, so it is uncertain by at most one unit: 0.148611 with a spread of 3e-5
+    the spread, so it is uncertain by about one unit (a spread estimates the run's
+    error, which can be a little more: ``chainrun.check``): 0.148611 with a spread of 3e-5
     is ``0.1486``, with 0.002 ``0.15`` (zeros kept: they are digits). A value whose
     leading digit the spread does not reach is shown to one digit, marked ``~``; an
     infinite spread supports nothing (``—``).

@@ -65,6 +65,28 @@ def disordered(tmp_path_factory):
     return folder, result
 
 
+#: Eight steel beads of one inch, e = 0.95 (Tsuji), against a steel wall: a clean line,
+#: whose errors follow the tolerance.
+CRADLE = {"name": "cradle", "units": "si",
+          "chain": {"n": 8, "k": 1, "speed": 0.5, "diameter": 0.0254, "material": "steel",
+                    "restitution": 0.95, "damping_law": "tsuji"},
+          "walls": {"right": {"material": "steel"}}}
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-9])
+def test_a_spread_estimates_the_runs_own_error(rtol):
+    # The spread |v(rtol) - v(rtol/10)| estimates the run's error, and is not a bound:
+    # the check run is off by about a tenth as much, so where the error follows the
+    # tolerance the run's error is about 1/0.9 of its spread (docs/guide.md, "Which
+    # digits hold"). The error is measured against a run at 1e-15, the smallest rtol.
+    exact = chainrun.simulate({**CRADLE, "solver": {"rtol": 1e-15}})
+    run = chainrun.simulate({**CRADLE, "solver": {"rtol": rtol, "check": True}})
+    error = np.abs(run.final_velocity.values - exact.final_velocity.values)
+    spread = run.final_velocity_spread.values
+    assert 0.8 * spread.max() <= error.max() <= 2.0 * spread.max()
+    assert np.all(error <= 2.0 * spread)
+
+
 @pytest.mark.slow
 def test_a_rounding_steered_line_has_spreads_well_above_a_billionth(disordered):
     folder, result = disordered
