@@ -127,10 +127,10 @@ def describe(run, varying=(), width: int | None = None) -> str:
             else f"{format_value(float(d.min()), 'diameter', units)}"
                  f"-{format_value(float(d.max()), 'diameter', units)}")
         what = " and ".join(n.replace("_", " ") for n in names) or "given"
-        parts.append(f"N = {line.n} {what} spheres"
+        parts.append(("" if "n" in varying else f"N = {line.n} ") + f"{what} spheres"
                      + ("" if "diameter" in varying else f" of {size}"))
     else:
-        parts.append(f"N = {line.n}")
+        parts.append("" if "n" in varying else f"N = {line.n}")
         drawn = _drawn(config.get("mass"), "mass", units)
         if drawn:
             parts.append(f"masses {drawn}")
@@ -143,8 +143,10 @@ def describe(run, varying=(), width: int | None = None) -> str:
     k = line.n if moving.all() else int(np.argmin(moving))
     if moving.any():
         speed = format_value(float(np.max(np.abs(line.velocity))), "velocity", units)
-        parts.append(f"K = {k} at {speed}" if units == "si" and "speed" not in varying
-                     else f"K = {k}")
+        strikers = "" if "k" in varying else f"K = {k}"
+        at = "" if units != "si" or "speed" in varying else \
+            f"at {speed}" if strikers else f"struck at {speed}"
+        parts.append(" ".join(p for p in (strikers, at) if p))
     if line.n > 1:
         parts.append(_law(np.asarray(line.alpha)))
     # the balls' damping before the walls, each wall with its own
@@ -418,14 +420,14 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
             x, y = np.array(sorted(points)).T
             name = "last ball" if ball == -1 else (f"ball {ball}" if ball > 0
                                                     else f"ball N{ball + 1:+d}")
-            quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])
-            xlabel, along = (axis_label(key, quantity, units, x) if quantity
-                             else (key, scale_for("alpha", "paper")))
+            xlabel, along = _swept_axis(key, units, x)
             axes.plot(along(x), scaled(y), label=name, gid=f"final_velocity/{key}/{ball}",
                       **MARKERS[which % len(MARKERS)])
             axes.set_xlabel(xlabel)
             if x.min() > 0 and x.max() >= 100 * x.min():  # values spread over decades
                 axes.set_xscale("log")
+            elif np.all(x == np.round(x)):  # K, N, a seed: whole numbers
+                _integer_axis(axes.xaxis)
         axes.axhline(0.0, color="0.6", linewidth=0.6)
         axes.set_ylabel(label)
         axes.legend(fontsize="small")
@@ -434,6 +436,25 @@ def draw_sweep(runs, balls=(1, -1)) -> Figure:
                               + [describe(runs[0], keys, 40 * len(keys))]),
                     fontsize="small")
     return figure
+
+
+#: What a swept key is, in words, by its last part (the key itself follows it)
+_SWEPT_NAMES = {"k": "K, balls that strike", "n": "N, balls", "alpha": "contact exponent",
+                "speed": "impact speed", "restitution": "restitution",
+                "precompression": "precompression", "diameter": "diameter",
+                "frequency": "drive frequency", "amplitude": "drive amplitude",
+                "seed": "random seed", "rtol": "step tolerance"}
+
+
+def _swept_axis(key: str, units: str, values) -> tuple[str, object]:
+    """The label of an axis of swept ``key``'s ``values`` and their scaling:
+    ``impact speed (chain.speed, mm/s)``, ``K, balls that strike (chain.k)``; the key
+    alone where it has no name here."""
+    name = _SWEPT_NAMES.get(key.rpartition(".")[2])
+    quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])
+    scaled = scale_for(quantity, units, values) if quantity else scale_for("alpha", "paper")
+    inside = ", ".join(p for p in (key if name else "", scaled.unit) if p)
+    return (name or key) + (f" ({inside})" if inside else ""), scaled
 
 
 def draw_sweep_runs(runs, *, log: bool = False) -> Figure:

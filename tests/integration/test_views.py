@@ -124,7 +124,11 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
         line = artist(figure, f"final_velocity/chain.k/{ball}")
         np.testing.assert_array_equal(line.get_xdata(), [1, 2, 3, 4])
         np.testing.assert_array_equal(line.get_ydata(), [finals[k][column] for k in (1, 2, 3, 4)])
-    assert figure.axes[0].get_xlabel() == "chain.k"
+    # the swept key in words and as written, whole-number ticks, and a title that
+    # does not give the K of one run for the whole sweep
+    assert figure.axes[0].get_xlabel() == "K, balls that strike (chain.k)"
+    assert np.all(np.mod(figure.axes[0].get_xticks(), 1.0) == 0.0)
+    assert "K =" not in figure.get_suptitle() and "N = 5" in figure.get_suptitle()
     from chainrun.plotting.views import draw_sweep_runs
 
     with style():
