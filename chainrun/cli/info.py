@@ -9,6 +9,7 @@ import click
 import numpy as np
 
 from chainrun.cli.common import fail
+from chainrun.cli.text import count
 from chainrun.errors import ChainrunError
 
 _EVENT_NAMES = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
@@ -22,8 +23,8 @@ _SHARE_NAMES = {"rebound": "rebound", "ejected": "ejected", "left behind": "left
 
 def _events(counts: dict[str, int]) -> str:
     total = sum(counts.values())
-    parts = [f"{counts[key]} {name}" for key, name in _EVENT_NAMES.items() if counts.get(key)]
-    return f"{total} events" + (f" ({', '.join(parts)})" if parts else "")
+    parts = [count(counts[key], name) for key, name in _EVENT_NAMES.items() if counts.get(key)]
+    return count(total, "events") + (f" ({', '.join(parts)})" if parts else "")
 
 
 def _ball(which: str, pick, s) -> str:

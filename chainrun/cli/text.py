@@ -11,6 +11,15 @@ import math
 import numpy as np
 
 
+def count(n: int, plural: str) -> str:
+    """``n`` things, in the singular for one: ``1 event``, ``4 events``, ``1 unloading
+    (a damped force at 0)`` (the first word of ``plural`` loses its s)."""
+    if n == 1:
+        first, _, rest = plural.partition(" ")
+        plural = first.removesuffix("s") + (f" {rest}" if rest else "")
+    return f"{n} {plural}"
+
+
 def momentum_text(error: float) -> str:
     """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
     return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
@@ -32,7 +41,7 @@ def run_line(run) -> str:
         how = f"stopped at t_end = {end}"
     else:
         how = run.message
-    text = (f"{how}, {run.events} events, {run.steps} steps, "
+    text = (f"{how}, {count(run.events, 'events')}, {count(run.steps, 'steps')}, "
             f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}, "
             + (f"dissipated {run.dissipated:.1%} of the "
                f"{'energy taken up' if run.driven else 'impact energy'}, "

@@ -322,6 +322,13 @@ def test_a_checked_runs_progress_says_when_its_check_runs(tmp_path):
     assert set(labels) == {"run", "run (check)"}
 
 
+def test_counts_of_one_are_singular():
+    from chainrun.cli.text import count
+
+    assert [count(n, "events") for n in (0, 1, 2)] == ["0 events", "1 event", "2 events"]
+    assert count(1, "unloadings (a damped force at 0)") == "1 unloading (a damped force at 0)"
+
+
 def test_analyze_points_a_run_of_ones_own_to_info_and_plot(cli, tmp_path):
     run = tmp_path / "mine.h5"
     run.write_bytes(b"")
