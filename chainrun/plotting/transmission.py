@@ -64,6 +64,10 @@ def _bands(axes, ds, scaled, right: float) -> list:
     return [Patch(label="stop band of the infinite line", **_STOP)]
 
 
+#: the fewest drive frequencies whose points are joined by lines
+JOIN_POINTS = 5
+
+
 def draw_transmission(ds, title: str = "") -> Figure:
     """The transmission curve of ``ds`` (``chainrun.transmission`` of a frequency
     sweep: dims frequency, sensor, harmonic), with ``title`` above it. Call inside
@@ -81,9 +85,13 @@ def draw_transmission(ds, title: str = "") -> Figure:
     t = ds["transmission"].sel(harmonic=1).transpose("frequency", "sensor")
     steady = (ds["steady"].transpose("frequency", "sensor") if "steady" in ds
               else t.notnull())
+    # a line joins the frequencies only where there are enough to be a curve: two or
+    # three points joined across a band edge would draw a transmission through the gap
+    # that no run measured
+    joined = {} if f.size >= JOIN_POINTS else {"linestyle": "none"}
     for i, ball in enumerate(ds["sensor"].values):
         (line,) = axes.plot(x, t.sel(sensor=ball).values, label=f"ball {ball}",
-                            gid=f"transmission/{ball}", **_symbol(i))
+                            gid=f"transmission/{ball}", **{**_symbol(i), **joined})
         line.set_markerfacecolor(line.get_color())   # steady: filled
         handles.insert(i, line)
         loose = ~steady.sel(sensor=ball).values

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import textwrap
 
 import numpy as np
@@ -75,9 +76,17 @@ def _legend(axes) -> None:
     if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
         axes.legend(fontsize="small")
     else:
-        axes.legend(handles, [textwrap.fill(label, _LEGEND_WRAP) for label in labels],
+        axes.legend(handles, [_wrap(label) for label in labels],
                     fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
                     borderaxespad=0.0)
+
+
+def _wrap(label: str) -> str:
+    """``label`` in lines of ``_LEGEND_WRAP`` characters, never breaking inside an
+    equation (``t = 0``) or between a number and its unit (``2 kHz``)."""
+    glued = re.sub(r"(?<=\S) = (?=\S)", "\u00a0=\u00a0", label)
+    glued = re.sub(r"(?<=\d) (?=[^\W\d]{1,3}\b)", "\u00a0", glued)
+    return textwrap.fill(glued, _LEGEND_WRAP).replace("\u00a0", " ")
 
 
 def _symlog(axes, values) -> None:

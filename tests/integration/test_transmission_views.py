@@ -58,6 +58,8 @@ def test_the_figure_draws_the_measured_curve_and_the_bands(sweep):
         np.testing.assert_array_equal(x, curve.frequency.values)
         np.testing.assert_array_equal(y, curve.transmission.sel(sensor=ball, harmonic=1))
     assert axes.get_yscale() == "log" and "stop/1" in drawn and "band_edge" in drawn
+    # three frequencies, one above the cut-off: points, not a curve drawn through the gap
+    assert all(drawn[f"transmission/{ball}"].get_linestyle() == "None" for ball in (1, 10))
     # a ramp of a few periods leaves the start's modes ringing in this lossless line: the
     # points where they outweigh the response at f are drawn hollow, and only those
     for ball in (1, 10):

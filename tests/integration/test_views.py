@@ -327,6 +327,16 @@ def test_a_title_gives_each_wall_its_own_restitution(beads):
         "K = 1 at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
 
 
+def test_a_wrapped_legend_label_keeps_equations_and_units_whole():
+    from chainrun.plotting.views import _LEGEND_WRAP, _wrap
+
+    lines = _wrap("in contacts and walls, since t = 0").splitlines()
+    assert lines == ["in contacts and walls, since", "t = 0"]
+    lines = _wrap("the drive's sine at 2 kHz, amplitude 10 µm, from rest").splitlines()
+    assert all(len(line) <= _LEGEND_WRAP for line in lines)
+    assert not any(line.endswith(("2", "10")) for line in lines)
+
+
 def test_curves_differ_in_colour_and_style_and_ball_axes_are_whole_numbers(beads):
     with style(colour=True):
         profiles = draw_view(beads, "profiles")
