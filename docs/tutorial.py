@@ -23,8 +23,9 @@ cradle = chainrun.simulate(
     chain={"n": 5, "k": 1, "alpha": 1.5},
     output={"times": {"start": 0, "stop": 10, "step": 0.1}},
 )
-# An xarray Dataset: dimensions time (the snapshots), ball (1..5) and event (the log of
-# contacts opening and closing).
+# An xarray Dataset: dimensions time (the snapshots), ball (1..5), contact (1..4, the
+# pairs of neighbours), wall (left, right) and event (the log of contacts opening and
+# closing).
 print(cradle.final_velocity.round(4).values)       # Table 1, K = 1
 assert abs(cradle.final_velocity.sel(ball=5).item() - 0.9888) < 5e-5
 print(f"terminal state at t = {cradle.attrs['end_time']:.4f}, "
