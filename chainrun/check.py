@@ -31,12 +31,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Check", "HOLD", "MIN_RTOL", "check_rtol", "short", "spread"]
+__all__ = ["Check", "ENERGY_DOUBT", "HOLD", "MIN_RTOL", "check_rtol", "energy_doubt",
+           "short", "spread"]
 
 #: Smallest step tolerance a run may ask for (``solver.rtol``).
 MIN_RTOL = 1e-15
 #: A ball holds when its spreads are at most this share of the line's impact speed.
 HOLD = 1e-9
+
+
+#: A run whose energy balance is off by more than this share of its energy (``|dE|/E``,
+#: ``Diagnostics.energy_error``) is reported: at the default rtol a balance holds to
+#: about 1e-11, and the rounding of a large stored energy costs a driven line about 1e-9.
+ENERGY_DOUBT = 1e-6
+
+
+def energy_doubt(energy_error: float) -> str | None:
+    """A warning for a run whose energy balance is off by ``energy_error`` (of its
+    energy), if that is over ``ENERGY_DOUBT``; else None."""
+    if not energy_error > ENERGY_DOUBT:
+        return None
+    return (f"its energy balance is off by {energy_error:.1e} of its energy (|dE|/E, "
+            f"over {short(ENERGY_DOUBT)}): its numbers may not hold; a smaller "
+            f"solver.rtol, and --check, show which do")
 
 
 def check_rtol(rtol: float) -> float:

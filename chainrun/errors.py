@@ -56,6 +56,11 @@ class ChainrunError(Exception):
     """Base class of every error chainrun reports to a user."""
 
 
+class ChainrunWarning(UserWarning):
+    """A valid input that is probably not what was meant (a length in millimetres typed
+    as metres), or a run whose numbers may not hold (its energy balance far off)."""
+
+
 class ConfigError(ChainrunError):
     """An experiment file that cannot be used.
 

@@ -422,17 +422,26 @@ def simulate(config=None, /, *, check: bool = False,
     """
     import xarray as xr
 
-    from chainrun.errors import ChainrunError
+    import warnings
+
+    from chainrun.check import energy_doubt
+    from chainrun.config.doubts import doubts
+    from chainrun.errors import ChainrunError, ChainrunWarning
     from chainrun.runner import run_file, simulate_run, sweep_specs
 
     experiment = _experiment(config, tables)
     specs = sweep_specs(experiment, check=check)
+    for doubt in doubts(specs):
+        warnings.warn(doubt, ChainrunWarning, stacklevel=2)
     with tempfile.TemporaryDirectory(prefix="chainrun-") as tmp:
         out = {}
         for spec in specs:
             summary = simulate_run(spec, Path(tmp))
             if not summary.ok:
                 raise ChainrunError(f"{spec.run_id}: {summary.message}")
+            doubt = energy_doubt(summary.energy_error)
+            if doubt:
+                warnings.warn(f"{spec.run_id}: {doubt}", ChainrunWarning, stacklevel=2)
             out[spec.run_id] = open_run(run_file(Path(tmp), spec))
     if not experiment.sweep:
         return out[specs[0].run_id]

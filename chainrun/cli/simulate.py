@@ -136,6 +136,7 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
 
     with start_up("simulate"):  # pydantic and the config models
         from chainrun.config import load_experiment
+        from chainrun.check import energy_doubt
         from chainrun.cli.text import run_line, velocity_table
         from chainrun.paths import outdir as default_outdir
         from chainrun.runner import simulate_experiment
@@ -154,6 +155,9 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     def run_done(run):
         bar.clear()
         click.echo(run_line(run))
+        doubt = getattr(run, "ok", False) and energy_doubt(run.energy_error)
+        if doubt:
+            click.echo(f"chainrun: warning: {run.run_id}: {doubt}", err=True)
 
     try:
         try:

@@ -202,6 +202,7 @@ def simulate_experiment(
         written, runs that would not fit in this machine's memory, or an executor
         that cannot be started.
     """
+    from chainrun.config.doubts import doubts
     from chainrun.limits import check_runs
     from chainrun.store import write_index
 
@@ -219,11 +220,11 @@ def simulate_experiment(
             f"{shown} holds run files of another config or of no chainrun run "
             f"({names}{more}); use --force to replace them"
         )
-    warnings = []
+    warnings = doubts(plan.todo)
     if scheduler is None and scheduler_file is None and executor is None:
         # refused before anything is made; on a cluster each worker checks its own
         # memory (simulate_run)
-        warnings = check_runs(plan.todo, outdir, runs_at_once=jobs or 1)
+        warnings += check_runs(plan.todo, outdir, runs_at_once=jobs or 1)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

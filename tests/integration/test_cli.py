@@ -380,3 +380,22 @@ def test_a_run_stops_before_its_file_fills_the_disk(tmp_path, monkeypatch):
                                          r"\(chainrun keeps 1.0 GB free\) after \d+ snapshots"):
         runner.simulate_run(spec, tmp_path)
     assert not list(tmp_path.iterdir())  # the partial file discarded
+
+
+def test_a_doubtful_input_and_a_far_off_balance_are_warned_of_and_run(tmp_path):
+    from chainrun.errors import ChainrunWarning
+
+    # ten 2 cm steel beads whose wall overlaps the last by a metre: a typo, which runs,
+    # its balls leaving at hundreds of km/s and its energy balance off by 2e-4
+    path = tmp_path / "overlap.toml"
+    path.write_text('name = "overlap"\nunits = "si"\n[chain]\nn = 10\nk = 1\nspeed = 0.5\n'
+                    'diameter = 0.02\nmaterial = "steel"\n[walls.right]\n'
+                    'material = "steel"\ngap = -1.0\n')
+    result = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    warned = [line for line in result.stderr.splitlines() if "warning" in line]
+    assert warned[0].startswith("chainrun: warning: walls.right.gap: an overlap of 1 m")
+    assert warned[1].startswith("chainrun: warning: run: its energy balance is off by")
+    with pytest.warns(ChainrunWarning) as caught:
+        chainrun.simulate(path)
+    assert [str(w.message)[:20] for w in caught] == ["walls.right.gap: an ", "run: its energy bala"]

@@ -160,9 +160,11 @@ def test_the_store_is_layered_and_writes_no_physics_of_its_own():
 
 
 #: the modules of chainrun.config, each importing only those before it: problems are
-#: worded, drives and tables checked, lines built, sweeps expanded, runs specified, the
-#: whole file validated, its text read (and the package re-exports the public names)
-CONFIG_ORDER = ["problems", "drives", "schema", "line", "sweeps", "run", "experiment", "text"]
+#: worded, drives and tables checked, lines built, sweeps expanded, runs specified and
+#: their doubtful values found, the whole file validated, its text read (and the
+#: package re-exports the public names)
+CONFIG_ORDER = ["problems", "drives", "schema", "line", "sweeps", "run", "doubts",
+                "experiment", "text"]
 
 
 def test_the_config_package_imports_one_way():

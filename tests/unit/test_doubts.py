@@ -1,0 +1,63 @@
+"""Valid inputs that are probably not meant (``chainrun.config.doubts``) and runs whose
+energy balance is far off (``chainrun.check.energy_doubt``): warned of, and run."""
+
+from __future__ import annotations
+
+import pytest
+
+from chainrun.check import ENERGY_DOUBT, energy_doubt
+from chainrun.config import load_experiment
+from chainrun.config.doubts import doubts
+from chainrun.runner import sweep_specs
+
+BEADS = """name = "beads"
+units = "si"
+[chain]
+n = 10
+k = 1
+speed = 0.5
+diameter = {diameter}
+material = "steel"
+{chain}
+[walls.right]
+material = "steel"
+gap = {gap}
+[solver]
+t_end = 1.0e-3
+"""
+
+
+def doubts_of(tmp_path, diameter=0.02, gap=0.0, chain=""):
+    path = tmp_path / "beads.toml"
+    path.write_text(BEADS.format(diameter=diameter, gap=gap, chain=chain))
+    return doubts(sweep_specs(load_experiment(path)))
+
+
+def test_real_beads_raise_no_doubt(tmp_path):
+    # a gap of a few beads and an overlap of a micrometre are experiments
+    assert doubts_of(tmp_path, gap=0.05, chain="gap = -1.0e-6") == []
+
+
+def test_millimetres_typed_as_metres_are_named(tmp_path):
+    # 20 m spheres of steel: (pi/6) 20^3 7850 kg = 3.29e7 kg
+    (line,) = doubts_of(tmp_path, diameter=20.0)
+    assert line.startswith("chain.diameter: spheres of 20 m (ball 1: 3.29e+07 kg)")
+    assert "(20 mm would be 0.02)" in line
+    (line,) = doubts_of(tmp_path, gap=5.0)
+    assert line.startswith("walls.right.gap: a gap of 5 m, 250 diameters")
+    (line,) = doubts_of(tmp_path, chain="gap = [0, 0, 3.0, 0, 0, 0, 0, 0, 0]")
+    assert line.startswith("chain.gap (contact 3, balls 3-4): a gap of 3 m")
+
+
+def test_an_overlap_deeper_than_hertz_holds_is_named(tmp_path):
+    (line,) = doubts_of(tmp_path, gap=-1.0)
+    assert line.startswith("walls.right.gap: an overlap of 1 m, 50 times the diameter; "
+                           "the spheres would be inside one another")
+    (line,) = doubts_of(tmp_path, chain="gap = -0.004")
+    assert line.startswith("chain.gap (contact 1, balls 1-2): an overlap of 4 mm, 0.2 of "
+                           "the diameter") and line.endswith("(and 8 more)")
+
+
+def test_a_far_off_energy_balance_is_a_doubt():
+    assert energy_doubt(1e-11) is None and energy_doubt(ENERGY_DOUBT) is None
+    assert energy_doubt(2.3e-4).startswith("its energy balance is off by 2.3e-04")
