@@ -118,13 +118,15 @@ def axis_label(name: str, quantity: str, units: str, values=()) -> tuple[str, Sc
     return (f"{name} ({scaled.unit})" if scaled.unit else name), scaled
 
 
-def format_value(value: float, quantity: str, units: str, digits: int = 4) -> str:
+def format_value(value: float, quantity: str, units: str, digits: int = 4,
+                 zeros: bool = False) -> str:
     """One value for a person: ``"223.6 µs"`` in SI, ``"6.177"`` in the paper's units
-    (``digits`` significant digits; ``nan``, ``inf`` as such)."""
+    (``digits`` significant digits; ``nan``, ``inf`` as such). ``zeros`` keeps trailing
+    zeros (``31.700 N``), as a measured value's digits are."""
     if not math.isfinite(value):
         return str(value)
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
-    text = f"{value * scaled.factor:.{digits}g}"
+    text = f"{value * scaled.factor:{'#' if zeros else ''}.{digits}g}".rstrip(".")
     return f"{text} {scaled.unit}" if scaled.unit else text
 
 

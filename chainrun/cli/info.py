@@ -28,11 +28,20 @@ def _events(counts: dict[str, int]) -> str:
 
 
 def _ball(which: str, pick, s) -> str:
-    from chainrun.units import format_value
+    """A ball's final velocity, with no digit its check's spread does not support (the
+    digits the velocity table shows)."""
+    from chainrun.units import format_supported, format_value, scale_for
 
     if pick is None:
         return f"no ball moves {which}"
-    return f"ball {pick[0]} at {format_value(pick[1], 'velocity', s.units, 6)}"
+    ball, v = pick
+    spread = (float(s.check.final_velocity_spread[ball - 1]) if s.check is not None
+              else math.nan)
+    if not (math.isfinite(spread) and spread > 0.0):
+        return f"ball {ball} at {format_value(v, 'velocity', s.units, 6)}"
+    scaled = scale_for("velocity", s.units, [v])
+    text = format_supported(scaled(v), scaled(spread))
+    return f"ball {ball} at {text}" + (f" {scaled.unit}" if scaled.unit else "")
 
 
 def _shares(s) -> str:
@@ -78,16 +87,30 @@ def _balls(s, threshold: str) -> list[str]:
             f"impact speed, {threshold}), {s.left_behind} left behind"]
 
 
+def _with_error(value: float, error: float) -> tuple[str, str]:
+    """``value`` to the place of its ``error``'s second significant digit, and the error
+    to two digits (602.71 and 0.23, 0.8405088363 and 3.7e-09); without a finite error,
+    six digits and ""."""
+    if not (math.isfinite(error) and error > 0.0):
+        return f"{value:.6g}", ""
+    place = math.floor(math.log10(error)) - 1
+    if place < 0:
+        return f"{value:.{-place}f}", f"{error:.2g}"
+    step = 10.0 ** place
+    return f"{round(value / step) * step:.0f}", f"{round(error / step) * step:.0f}"
+
+
 def _pulse_lines(p) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
     the wave's speed when two sensors or more saw it."""
     from chainrun.units import format_value, scale_for
 
+    # measured values keep their trailing zeros (31.700 N beside 33.317 N)
     def t(x):
-        return format_value(float(x), "time", p.units, 5)
+        return format_value(float(x), "time", p.units, 5, zeros=True)
 
     def f(x):
-        return format_value(float(x), "force", p.units, 5)
+        return format_value(float(x), "force", p.units, 5, zeros=True)
 
     lines = []
     for i, ball in enumerate(p.balls):
@@ -108,13 +131,13 @@ def _pulse_lines(p) -> list[str]:
         v = abs(speed.value) if p.backward_speed.points else speed.value
         if p.speed_si is not None:
             scaled = scale_for("velocity", "si", [v])
-            value = f"{scaled(v):.6g} {scaled.unit}"
-            error = (f" +- {scaled(speed.error):.2g} {scaled.unit}"
-                     if np.isfinite(speed.error) else "")
+            value, error = _with_error(scaled(v), scaled(speed.error))
+            value, error = f"{value} {scaled.unit}", (f" +- {error} {scaled.unit}"
+                                                      if error else "")
         else:  # (a line without diameters: its speed in balls per unit of its time)
             per = "balls/s" if p.units == "si" else "balls per unit time"
-            value, error = f"{v:.6g} {per}", (
-                f" +- {speed.error:.2g}" if np.isfinite(speed.error) else "")
+            value, error = _with_error(v, speed.error)
+            value, error = f"{value} {per}", (f" +- {error}" if error else "")
         lines.append("wave speed " + (f"{way} " if p.backward_speed.points else "")
                      + f"{value}{error} (a fit through {speed.points} sensors' peak times"
                      + ("; no uncertainty from two" if speed.points == 2 else "") + ")")

@@ -193,6 +193,34 @@ def test_an_si_run_speaks_si(tmp_path):
     assert re.search(r"impact energy [\d.]+ mJ", field(out, "energy"))
 
 
+def test_a_checked_runs_velocities_show_the_digits_its_table_shows(tmp_path):
+    config = tmp_path / "cradle.toml"
+    config.write_text('name = "cradle"\nunits = "si"\n[chain]\nn = 8\nk = 1\nspeed = 0.5\n'
+                      'diameter = 0.0254\nmaterial = "steel"\nrestitution = 0.95\n'
+                      'damping_law = "tsuji"\n[walls.right]\nmaterial = "steel"\n'
+                      '[solver]\nrtol = 1e-5\n')
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "out"),
+                                       "--check"])
+    assert result.exit_code == 0, result.output
+    table = {line.split()[0]: line.split()[1] for line in result.stdout.splitlines()
+             if line[:1].isdigit()}
+    balls = field(info(tmp_path / "out" / "run.h5").stdout, "balls")
+    shown = re.findall(r"ball (\d+) at (\S+) mm/s", balls)
+    assert shown == [("1", table["1"])]  # every ball rebounds from the wall; ball 1 fastest
+    assert len(table["1"].split(".")[1]) == 2  # -412.36: its spread cuts a digit of six
+    for ball, value in shown:
+        assert value == table[ball], (ball, value, table[ball])
+
+
+def test_a_value_is_shown_to_its_errors_second_digit():
+    from chainrun.cli.info import _with_error
+
+    assert _with_error(602.706, 0.23) == ("602.71", "0.23")
+    assert _with_error(0.84050884, 3.7e-9) == ("0.8405088400", "3.7e-09")
+    assert _with_error(1234.5, 56.0) == ("1234", "56")
+    assert _with_error(589.809, float("nan")) == ("589.809", "")
+
+
 def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     """Sensors in a chain of steel beads struck at 0.5 m/s: each records the solitary
     wave, whose peak contact force is 0.63955 in the paper's units (0.640 printed in
