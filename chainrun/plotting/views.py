@@ -265,15 +265,16 @@ def _forces(run, figure: Figure, axes) -> None:
     _integer_axis(axes.yaxis)
 
 
-def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str) -> None:
-    _snapshots_needed(run, name, 1)
+def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str,
+                    gid: str | None = None) -> None:
+    _snapshots_needed(run, gid or name, 1)
     picks = np.unique(np.linspace(0, run.times.size - 1, MAX_PROFILES).round().astype(int))
     rows = np.asarray(data[picks])
     label, scaled = axis_label(name, quantity, run.units, rows)
     balls = np.arange(1, run.n + 1)
     for row, i in zip(rows, picks):
         axes.plot(balls, scaled(row), label=f"t = {format_value(run.times[i], 'time', run.units)}",
-                  gid=f"{name}/{i}")
+                  gid=f"{gid or name}/{i}")
     axes.set_xlabel("ball")
     _integer_axis(axes.xaxis)
     axes.set_ylabel(label)
@@ -285,7 +286,15 @@ def _profiles(run, figure: Figure, axes) -> None:
 
 
 def _displacements(run, figure: Figure, axes) -> None:
-    _along_the_line(run, figure, axes, "displacement", run.positions, "position")
+    """Displacements along the line; on a line that starts displaced (precompressed, its
+    static compressions far larger than any wave's), their change since t = 0, as the
+    force image draws a loaded line's forces."""
+    x = np.asarray(run.positions)
+    if run.times[0] == 0.0 and np.any(x[0] != 0.0):
+        _along_the_line(run, figure, axes, "displacement since t = 0", x - x[0], "position",
+                        gid="displacement")
+    else:
+        _along_the_line(run, figure, axes, "displacement", x, "position")
 
 
 def _sensors(run, figure: Figure, axes) -> None:

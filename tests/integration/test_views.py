@@ -201,6 +201,15 @@ t_end = 20
     low, high = image.get_clim()
     assert low == -high and high == pytest.approx(np.abs(force - force[0]).max())
     assert "since t = 0" in figure.axes[-1].get_ylabel()
+    # its displacements likewise: the change since t = 0, not the static compressions'
+    # ramp along the line
+    with style():
+        figure = draw_view(run, "displacements")
+    lines = [a for a in figure.axes[0].get_lines() if str(a.get_gid()).startswith("displ")]
+    assert lines and figure.axes[0].get_ylabel().startswith("displacement since t = 0")
+    for a in lines:
+        i = int(a.get_gid().split("/")[1])
+        np.testing.assert_array_equal(a.get_ydata(), run.positions[i] - run.positions[0])
 
 
 def test_the_sensor_view_is_the_mean_force_stored(tmp_path):
