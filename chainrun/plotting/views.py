@@ -69,12 +69,16 @@ _LEGEND_WRAP = 30
 
 
 def _legend(axes) -> None:
-    """The axes' legend: inside them where it is short, else beside them, each label
-    wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line would take the
-    figure's width from the axes)."""
+    """The axes' legend: inside them where it is short; a few long labels below them, in
+    two columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP``
+    characters (a longer line would take the figure's width from the axes)."""
     handles, labels = axes.get_legend_handles_labels()
     if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
         axes.legend(fontsize="small")
+    elif len(labels) <= _LEGEND_INSIDE:
+        axes.legend(handles, [_wrap(label) for label in labels], fontsize="small",
+                    loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2,
+                    borderaxespad=0.0)
     else:
         axes.legend(handles, [_wrap(label) for label in labels],
                     fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),

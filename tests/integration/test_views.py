@@ -412,11 +412,30 @@ def test_a_log_scale_keeps_every_point_inside_and_no_empty_half(wave):
     assert axes.yaxis.get_transform().linthresh == 0.01
 
 
-def test_a_long_legend_stands_beside_the_axes(beads):
-    """Six profiles, or the energy view's long labels, would hide curves inside."""
+def test_a_long_legend_stands_outside_the_axes(beads, tmp_path):
+    """Six profiles, or the energy view's long labels, would hide curves inside: many
+    entries stand beside the axes, a few long ones below them, where they take none of
+    the axes' width."""
+    loaded = read_run(simulate_text(tmp_path, """name = "p"
+[chain]
+n = 8
+k = 1
+alpha = 1.5
+precompression = 0.2
+[walls.right]
+[output]
+times = {start = 0, stop = 10, step = 0.5}
+[solver]
+t_end = 10
+""") / "run.h5")
     with style(colour=True):
         figure = draw_view(beads, "profiles")
+        energy = draw_view(loaded, "energy")  # "in contacts and walls (above the static..."
     legend = figure.axes[0].get_legend()
     figure.canvas.draw()  # (a legend's place is known once drawn)
     box = legend.get_window_extent()
     assert box.x0 >= figure.axes[0].get_window_extent().x1
+    energy.canvas.draw()
+    axes = energy.axes[0].get_window_extent()
+    below = energy.axes[0].get_legend().get_window_extent()
+    assert below.y1 <= axes.y0 and axes.width >= 0.75 * energy.bbox.width
