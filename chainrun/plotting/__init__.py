@@ -54,7 +54,9 @@ def style(colour: bool = False):
     The paper's figures are black and white, as the paper's are. ``colour`` gives the
     views of runs matplotlib's colour-blind-safe cycle ``petroff10`` (M. A. Petroff,
     "Accessible Color Sequences for Data Visualization", 2024), with line styles that
-    make every curve of up to 90 one of its own (``LINESTYLES``).
+    make every curve of up to 90 one of its own (``LINESTYLES``), and tick labels as
+    plain text rather than mathtext (the same look, and a third of a view's drawing
+    time spared: ``chainrun plot`` of a sweep draws dozens).
     """
     import matplotlib
     import matplotlib.style
@@ -70,6 +72,7 @@ def style(colour: bool = False):
             styles = list(LINESTYLES) * (n // len(LINESTYLES))
             matplotlib.rcParams["axes.prop_cycle"] = (cycler(color=colours)
                                                       + cycler(linestyle=styles))
+            matplotlib.rcParams["axes.formatter.use_mathtext"] = False
         yield
 
 
