@@ -283,6 +283,9 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     head = (f"{'file':<{wide}} {'N':>7} {'K':>4} {'outcome':<10} "
             f"{'end (' + time.unit + ')':>14} {'events':>8} "
             f"{'forward (' + speed.unit + ')':>16}")
+    damped = any(s.energy.get("dissipated", 0.0) > 0.0 for s in summaries)
+    if damped:
+        head += f" {'dissipated':>11}"
     checked = any(s.check is not None for s in summaries)
     if checked:
         head += f" {'hold to 1e-9':>13}"
@@ -290,9 +293,12 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     for s in summaries:
         forward = s.forward[1] if s.forward else 0.0
         outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
+        share = s.energy.get("dissipated", math.nan)
         lines.append(f"{Path(s.path).name:<{wide}} {s.n:>7} {s.k:>4} {outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
-                     f"{speed(forward):>16.6g}" + (f" {_holding(s):>13}" if checked else ""))
+                     f"{speed(forward):>16.6g}"
+                     + (f" {share:>11.2%}" if damped else "")
+                     + (f" {_holding(s):>13}" if checked else ""))
     if not ensemble:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "

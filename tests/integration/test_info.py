@@ -92,6 +92,26 @@ def test_an_output_folder_has_a_line_per_run(table1):
     assert info(table1 / "index.h5").stdout == result.stdout
 
 
+def test_a_damped_sweeps_lines_give_each_runs_dissipated_share(tmp_path):
+    config = tmp_path / "e.toml"
+    config.write_text('name = "e"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
+                      'diameter = 0.0254\nmaterial = "steel"\nrestitution = 0.9\n'
+                      'damping_law = "tsuji"\n[sweep]\n"chain.restitution" = [0.5, 1.0]\n')
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "e")])
+    assert result.exit_code == 0, result.output
+    lines = info(tmp_path / "e").stdout.splitlines()
+    assert lines[1].split()[-1] == "dissipated"
+    shares = {}
+    for line in lines[2:4]:
+        with h5py.File(tmp_path / "e" / line.split()[0]) as f:
+            m, v = f["model/mass"][0], f["model/velocity"][0]  # the striker's
+            lost = f["results/contact_dissipation"][()].sum() / (0.5 * m * v**2)
+        shares[line.split()[0]] = (float(line.split()[-1].rstrip("%")), 100 * lost)
+    assert shares["restitution=1.0.h5"][0] == 0.0
+    share, lost = shares["restitution=0.5.h5"]
+    assert share == pytest.approx(lost, abs=0.01) and share > 10.0
+
+
 def test_a_folder_of_long_run_ids_keeps_its_columns(tmp_path):
     from helpers import simulate_text
 
