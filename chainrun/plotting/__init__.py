@@ -42,9 +42,10 @@ PDF_METADATA = {"Creator": "chainrun", "Producer": None, "CreationDate": None,
 #: Line styles that go with the colour cycle of views: two curves differ in style as
 #: well as in colour, in grey print and for colour-blind readers. Nine styles against
 #: ten colours: the pairs repeat only after 90 curves, so the eleventh curve is not
-#: the first one again.
-LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (1, 1)),
-              (0, (5, 2, 1, 2)), (0, (8, 2)))
+#: the first one again. The dotted styles go with the cycle's dark colours (red, dark
+#: grey), the light ones (grey, khaki) with dashes: a light dotted curve is faint.
+LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (5, 2, 1, 2)),
+              (0, (8, 2)), (0, (1, 1)))
 
 
 @contextmanager

@@ -481,15 +481,18 @@ def _swept_axis(key: str, units: str, values) -> tuple[str, object]:
 
 def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
     """A panel per run of a sweep: its final velocities against ball number, titled by
-    its run id, on a grid of at most 5 columns."""
+    its run id, on a grid of at most 5 columns, every panel on one velocity scale."""
     cols = min(5, len(runs))
     rows = -(-len(runs) // cols)
     units = runs[0].units
     label, scaled = axis_label(_final_name(runs), "velocity", units,
                                np.concatenate([np.asarray(r.final_velocity) for r in runs]))
     figure = Figure(figsize=(2.6 * cols, 2.2 * rows + 0.4), layout="constrained")
+    first = None
     for i, run in enumerate(runs):
-        axes = figure.add_subplot(rows, cols, i + 1)
+        # one velocity scale for every panel, so that the runs compare at a glance
+        axes = figure.add_subplot(rows, cols, i + 1, sharey=first)
+        first = first or axes
         v = scaled(run.final_velocity)
         axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, linewidth=0.8,
                   gid=f"final_velocity/{run.parameters.get('run_id', i)}")
@@ -497,8 +500,8 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
         axes.set_title(str(run.parameters.get("run_id", i)), fontsize="small")
         axes.tick_params(labelsize="x-small")
         _integer_axis(axes.xaxis)
-        if log:
-            _symlog(axes, np.asarray(v))
+    if log:  # (the panels share it: a scale over every run's velocities)
+        _symlog(first, scaled(np.concatenate([np.asarray(r.final_velocity) for r in runs])))
     figure.supxlabel("ball", fontsize="small")
     figure.supylabel(label, fontsize="small")
     return figure

@@ -134,6 +134,7 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
     with style():
         panels = draw_sweep_runs([read_run(out / row["file"]) for row in rows])
     assert [ax.get_title() for ax in panels.axes] == ["k=1", "k=2", "k=3", "k=4"]
+    assert len({ax.get_ylim() for ax in panels.axes}) == 1  # one scale: runs compare
     for k, ax in enumerate(panels.axes, start=1):
         (line,) = [a for a in ax.get_lines() if a.get_gid() == f"final_velocity/k={k}"]
         np.testing.assert_array_equal(line.get_ydata(), finals[k])
