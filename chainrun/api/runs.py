@@ -420,9 +420,9 @@ def simulate(config=None, /, *, check: bool = False,
     chainrun.errors.ChainrunError
         If a run fails (its message says where and why).
     """
-    import xarray as xr
-
     import warnings
+
+    import xarray as xr
 
     from chainrun.check import energy_doubt
     from chainrun.config.doubts import doubts

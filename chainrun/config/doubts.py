@@ -1,7 +1,7 @@
 """Inputs that are valid but probably not meant: warnings, not errors.
 
 A length typed in millimetres in an SI file (``diameter = 20``) is a valid line of
-20 m spheres of 33 t each, and it runs; so does a wall 5 m away, or an overlap deeper
+20 m spheres of 33,000 t each, and it runs; so does a wall 5 m away, or an overlap deeper
 than a bead. Such a run ends well and answers a question nobody asked, so the command
 says so before it runs (``doubts``), naming the key, with what the value means and what
 was probably meant. Only lines of spheres in SI units are judged: the paper's units
