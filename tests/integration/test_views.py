@@ -176,10 +176,8 @@ def test_the_force_image_and_displacements_are_the_files(wave):
         np.testing.assert_array_equal(a.get_ydata(), raw["x"][int(a.get_gid().split("/")[1])])
 
 
-def test_a_loaded_lines_force_image_is_the_change_from_its_static_load(tmp_path):
-    """A precompressed line: the contact forces at t = 0 are the static load, and the
-    image is each force's change from it, on a scale centred at no change."""
-    out = simulate_text(tmp_path, """name = "p"
+#: A precompressed line against a wall, struck by one ball.
+LOADED = """name = "p"
 [chain]
 n = 12
 k = 1
@@ -190,7 +188,13 @@ precompression = 0.2
 times = {start = 0, stop = 20, step = 0.5}
 [solver]
 t_end = 20
-""")
+"""
+
+
+def test_a_loaded_lines_force_image_is_the_change_from_its_static_load(tmp_path):
+    """A precompressed line: the contact forces at t = 0 are the static load, and the
+    image is each force's change from it, on a scale centred at no change."""
+    out = simulate_text(tmp_path, LOADED)
     run = read_run(out / "run.h5")
     with style():
         figure = draw_view(run, "forces")
@@ -417,18 +421,7 @@ def test_a_long_legend_stands_outside_the_axes(beads, tmp_path):
     """Six profiles, or the energy view's long labels, would hide curves inside: many
     entries stand beside the axes, a few long ones below them, where they take none of
     the axes' width."""
-    loaded = read_run(simulate_text(tmp_path, """name = "p"
-[chain]
-n = 8
-k = 1
-alpha = 1.5
-precompression = 0.2
-[walls.right]
-[output]
-times = {start = 0, stop = 10, step = 0.5}
-[solver]
-t_end = 10
-""") / "run.h5")
+    loaded = read_run(simulate_text(tmp_path, LOADED) / "run.h5")
     with style(colour=True):
         figure = draw_view(beads, "profiles")
         energy = draw_view(loaded, "energy")  # "in contacts and walls (above the static..."
