@@ -439,7 +439,7 @@ def simulate(config=None, /, *, check: bool = False,
             summary = simulate_run(spec, Path(tmp))
             if not summary.ok:
                 raise ChainrunError(f"{spec.run_id}: {summary.message}")
-            doubt = energy_doubt(summary.energy_error)
+            doubt = energy_doubt(summary.energy_error, summary.energy_floor)
             if doubt:
                 warnings.warn(f"{spec.run_id}: {doubt}", ChainrunWarning, stacklevel=2)
             out[spec.run_id] = open_run(run_file(Path(tmp), spec))

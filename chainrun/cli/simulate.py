@@ -155,7 +155,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     def run_done(run):
         bar.clear()
         click.echo(run_line(run))
-        doubt = getattr(run, "ok", False) and energy_doubt(run.energy_error)
+        doubt = getattr(run, "ok", False) and energy_doubt(run.energy_error,
+                                                           run.energy_floor)
         if doubt:
             click.echo(f"chainrun: warning: {run.run_id}: {doubt}", err=True)
 

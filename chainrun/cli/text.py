@@ -20,6 +20,18 @@ def count(n: int, plural: str) -> str:
     return f"{n} {plural}"
 
 
+def _rounding(run) -> str:
+    """`` (within its rounding, 2.5e-01)`` after |dE|/E where the rounding of the
+    balance's terms can leave more than a millionth (``Diagnostics.energy_floor``: a
+    precompressed line shaken by far less than its static compressions)."""
+    from chainrun.check import ENERGY_DOUBT
+
+    floor = getattr(run, "energy_floor", 0.0)
+    if not (floor > ENERGY_DOUBT and run.energy_error <= floor):
+        return ""
+    return f" (within its rounding, {floor:.1e})"
+
+
 def momentum_text(error: float) -> str:
     """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
     return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
@@ -42,7 +54,8 @@ def run_line(run) -> str:
     else:
         how = run.message
     text = (f"{how}, {count(run.events, 'events')}, {count(run.steps, 'steps')}, "
-            f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}, "
+            f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}"
+            + _rounding(run) + ", "
             + (f"dissipated {run.dissipated:.1%} of the "
                f"{'energy taken up' if run.driven else 'impact energy'}, "
                if run.dissipated else "")

@@ -42,6 +42,7 @@ class RunSummary:
     check: Check | None = None  # the conditioning check, if the run had one
     speed: float = 1.0  # the line's impact speed (largest initial speed)
     driven: bool = False  # the line is driven: it took up its impact and the drives' work
+    energy_floor: float = 0.0  # the energy_error rounding alone can leave (Diagnostics)
 
     def index_entry(self) -> dict:
         return dict(

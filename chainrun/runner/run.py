@@ -126,6 +126,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         final_velocity=sol.final_velocity,
         dissipated=_share(sol.dissipated_energy, line, sol.drive_energy), units=spec.units,
         check=check, speed=_speed(line), driven=line.is_driven,
+        energy_floor=d.energy_floor,
     )
 
 
@@ -190,4 +191,5 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         message=run.message, final_velocity=run.final_velocity, skipped=True,
         dissipated=_share(run.dissipated_energy, run.line, run.drive_energy), units=run.units,
         check=run.check, speed=_speed(run.line), driven=run.line.is_driven,
+        energy_floor=float(d.get("energy_floor", 0.0)),
     )

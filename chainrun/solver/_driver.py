@@ -26,7 +26,8 @@ from chainrun.solver import _jit, _loop, _state
 from chainrun.solver._setup import _grow, _line_state, _new_state, _Prepared
 from chainrun.solver.model import Line, strikers
 from chainrun.solver.physics import (
-    contact_law, impulse, line_kinetic_energy, line_momentum, line_potential_energy,
+    contact_law, energy_rounding, impulse, line_kinetic_energy, line_momentum,
+    line_potential_energy,
 )
 
 _OUTCOMES = {
@@ -340,12 +341,18 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0
+    # the balance cannot be known closer than the rounding of its terms: on a
+    # precompressed line, that of the stored energy through the positions' rounding
+    eps = np.finfo(float).eps
+    floor = (energy_rounding(x0, line, 0.0) + energy_rounding(x1, line, t_end)
+             + eps * (k0 + k1 + abs(work) + abs(float(S.fs[_state.F_DISS]) * sc.energy)))
     return Diagnostics(
         steps=int(S.ints[_state.I_STEPS]),
         rejected_steps=int(S.ints[_state.I_REJ]),
         events=events,
         momentum_error=p_err,
         energy_error=abs(e1 - e0) / scale,
+        energy_floor=floor / scale,
         energy_correction=eproj / scale,
         wall_time=wall,
         max_window=int(S.ints[_state.I_MAXWIN]),

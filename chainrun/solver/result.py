@@ -100,7 +100,10 @@ class Diagnostics:
     relative like energy_error, the honest measure of the integration error that the
     projection removes. closed_form_collisions counts the isolated binary collisions
     taken whole (in closed form, or a damped pair's own relative motion) rather than
-    integrated with the clusters (``_pairs``).
+    integrated with the clusters (``_pairs``). energy_floor, relative like energy_error,
+    is what the rounding of the balance's terms leaves uncertain
+    (``physics.energy_rounding``): an energy_error near it is rounding, not the solver's
+    error (a precompressed line stores far more energy than a small drive moves).
     """
 
     steps: int
@@ -114,6 +117,7 @@ class Diagnostics:
     rtol: float
     velocity_floor: float
     closed_form_collisions: int = 0
+    energy_floor: float = 0.0
 
 
 @dataclass(frozen=True)

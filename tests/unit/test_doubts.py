@@ -61,3 +61,25 @@ def test_an_overlap_deeper_than_hertz_holds_is_named(tmp_path):
 def test_a_far_off_energy_balance_is_a_doubt():
     assert energy_doubt(1e-11) is None and energy_doubt(ENERGY_DOUBT) is None
     assert energy_doubt(2.3e-4).startswith("its energy balance is off by 2.3e-04")
+
+
+def test_the_energy_rounding_bounds_what_a_rounding_of_the_positions_moves():
+    # a precompressed line between walls: its positions carry the static compressions,
+    # and moving each by one unit in its last place moves the stored energy by at most
+    # the sum of the forces times those units, the estimate energy_rounding gives
+    import numpy as np
+
+    from chainrun.solver.model import Line, Wall, precompress
+    from chainrun.solver.physics import energy_rounding, line_potential_energy
+
+    line = precompress(Line.make(20, alpha=1.5, velocity=np.zeros(20), left=Wall(1.0, 1.5),
+                                 right=Wall(1.0, 1.5)), 5.0)
+    x = line.position
+    floor = energy_rounding(x, line)
+    u = float(line_potential_energy(x, line))
+    rng = np.random.default_rng(1)
+    moved = [abs(float(line_potential_energy(x + rng.choice([-1.0, 1.0], x.size)
+                                             * np.spacing(np.abs(x)), line)) - u)
+             for _ in range(50)]
+    assert 0.0 < max(moved) <= floor
+    assert floor <= 1e3 * np.finfo(float).eps * u * line.n  # and not wildly above it

@@ -210,7 +210,7 @@ def test_results_events_diagnostics(run):
         assert dict(d) == pytest.approx({
             "steps": 1234, "rejected_steps": 7, "events": 5, "momentum_error": 3e-16,
             "energy_error": -2e-15, "energy_correction": 4e-14, "wall_time": 0.25, "max_window": 5, "rtol": 1e-12,
-            "velocity_floor": 1e-12, "closed_form_collisions": 0,
+            "velocity_floor": 1e-12, "closed_form_collisions": 0, "energy_floor": 0.0,
         })
 
 
