@@ -26,8 +26,8 @@ from chainrun.solver import _jit, _loop, _state
 from chainrun.solver._setup import _grow, _line_state, _new_state, _Prepared
 from chainrun.solver.model import Line, strikers
 from chainrun.solver.physics import (
-    contact_law, energy_rounding, impulse, line_kinetic_energy, line_momentum,
-    line_potential_energy,
+    baseline_energy, contact_law, energy_rounding, impulse, line_kinetic_energy,
+    line_momentum, line_potential_energy,
 )
 
 _OUTCOMES = {
@@ -308,9 +308,10 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     The momentum changes by the external forces', the drives' and the walls' impulses
     (``physics.impulse``); its error is relative to the momentum of the line's scales
     (absolute for the paper's line, whose scales are 1). Kinetic plus contact energy
-    less the forces' work is conserved, relative to the initial kinetic energy (K/2
-    for the paper's line; for a line starting at rest, to its initial energy or the
-    work, the larger); on a damped line the energy the damping dissipated counts in the
+    less the forces' work is conserved, relative to the impact energy (the strikers'
+    kinetic energy and an initial overlap's, ``physics.impact_energy``; K/2 for the
+    paper's line; for a line starting at rest, to its initial energy or the work, the
+    larger); on a damped line the energy the damping dissipated counts in the
     balance, on a driven line the drives' work (relative to the energy in motion: the
     largest of the initial and final kinetic energy, the work and the contacts' energy
     gained).
@@ -337,7 +338,9 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     if P.driven:
         scale = max(k0, k1, abs(work), abs(u1 - u0))
     else:
-        scale = k0 if k0 > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
+        # the impact energy: the strikers' and an initial overlap's (impact_energy)
+        impact = k0 + u0 - baseline_energy(line)
+        scale = impact if impact > 0.0 else max(abs(e0), abs(float(line.force @ (x1 - x0))))
     eproj = float(S.fs[_state.F_EPROJ]) * sc.energy
     if not scale > 0.0:
         scale = 1.0

@@ -92,8 +92,8 @@ class Diagnostics:
 
     momentum_error is relative to the momentum of the line's scales (absolute on the
     paper's line, whose initial momentum is K), with the external forces', the drives'
-    and the walls' impulses accounted, and energy_error to its initial kinetic energy
-    (K/2 on the paper's line), with the external forces' work, the drives' and the
+    and the walls' impulses accounted, and energy_error to its impact energy (the
+    strikers' kinetic energy and an initial overlap's: K/2 on the paper's line), with the external forces' work, the drives' and the
     damping's dissipation accounted (``_driver._diagnostics``). Each cluster's internal energy is projected
     back to its conserved value at every change of structure (see
     ``_projection._project_energy``); energy_correction is the sum of those corrections,
