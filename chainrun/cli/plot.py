@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import click
@@ -33,6 +34,33 @@ def _transmission(folder: Path):
     if not swept or not all(run.sensor_balls.size for run in runs):
         return None
     return measure_sweep(runs)
+
+
+def _draw_run(args):
+    from chainrun.plotting import render_run
+
+    path, views, out, log = args
+    return path, render_run(path, views, out=out, log=log)
+
+
+def _each_run(files, views, out, log):
+    """(run file, files drawn) for each of ``files`` in order: the runs' views drawn on
+    as many processes as there are cores (a sweep's runs are independent figures)."""
+    tasks = [(path, views, out, log) for path in files]
+    workers = min(len(tasks), os.cpu_count() or 1, MAX_PLOT_WORKERS)
+    if workers <= 1:
+        yield from map(_draw_run, tasks)
+        return
+    import concurrent.futures as cf
+    import multiprocessing
+
+    # (forked: the workers start with this process's imports, and draw in its style)
+    with cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+        yield from pool.map(_draw_run, tasks)
+
+
+#: The most processes ``chainrun plot`` draws a sweep's runs on.
+MAX_PLOT_WORKERS = 8
 
 
 @click.command()
@@ -143,8 +171,8 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
             try:
                 # naming only a sweep's views draws no run's own
                 only_sweep = views is not None and not run_views
-                for path in [] if only_sweep else files:
-                    paths = render_run(path, run_views, out=out, log=log)
+                drawn = _each_run([] if only_sweep else files, run_views, out, log)
+                for path, paths in drawn:
                     click.echo(f"{path}: {', '.join(str(p) for p in paths)}")
                 if sweep:
                     paths = render_sweep(folder, numbers, out=out, log=log,

@@ -151,6 +151,36 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
         assert f"no run has ball {bad} (N = 5;" in result.stderr
 
 
+def test_a_sweeps_runs_drawn_on_several_processes_are_the_bytes_of_one(tmp_path,
+                                                                      monkeypatch):
+    import importlib
+
+    plot_command = importlib.import_module("chainrun.cli.plot")  # (the module, not the command)
+
+    out = simulate_text(tmp_path, """name = "s"
+[chain]
+n = 5
+k = 1
+alpha = 1.5
+[output]
+times = [0.0, 5.0, 10.0]
+[sweep]
+"chain.k" = [1, 2, 3]
+""")
+    drawn = {}
+    for workers in (2, 1):
+        monkeypatch.setattr(plot_command, "MAX_PLOT_WORKERS", workers)
+        monkeypatch.setattr(plot_command.os, "cpu_count", lambda: 2)
+        result = CliRunner().invoke(main, ["plot", str(out), "--what", "final,energy",
+                                           "-o", str(tmp_path / f"w{workers}")])
+        assert result.exit_code == 0, result.output
+        lines = result.stdout.splitlines()
+        assert [line.split(":")[0] for line in lines[:3]] == [
+            str(out / f"k={k}.h5") for k in (1, 2, 3)]  # in the runs' order
+        drawn[workers] = {p.name: p.read_bytes() for p in (tmp_path / f"w{workers}").iterdir()}
+    assert len(drawn[1]) == 16 and drawn[2] == drawn[1]  # (3 runs x 2 views + 2 of the sweep) x PNG, PDF
+
+
 def test_an_artefact_name_is_an_artefact_even_beside_a_folder_of_that_name(tmp_path,
                                                                            monkeypatch):
     monkeypatch.chdir(tmp_path)
