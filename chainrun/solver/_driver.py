@@ -347,7 +347,7 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     # the balance cannot be known closer than the rounding of its terms: on a
     # precompressed line, that of the stored energy through the positions' rounding
     eps = np.finfo(float).eps
-    floor = (energy_rounding(x0, line, 0.0) + energy_rounding(x1, line, t_end)
+    floor = (energy_rounding(x0, line, 0.0, u0) + energy_rounding(x1, line, t_end, u1)
              + eps * (k0 + k1 + abs(work) + abs(float(S.fs[_state.F_DISS]) * sc.energy)))
     return Diagnostics(
         steps=int(S.ints[_state.I_STEPS]),

@@ -203,24 +203,33 @@ def line_potential_energy(x: np.ndarray, line, t=None) -> np.ndarray:
     return total[()]
 
 
-def energy_rounding(x: np.ndarray, line, t: float = 0.0) -> float:
-    """How far ``line_potential_energy(x, line, t)`` moves when the displacements ``x``
-    (shape (N,)) move by their rounding, one unit in the last place each: the sum over
-    the contacts (walls included) of the force times the rounding of the positions it
-    spans, with the energy's own rounding. On a precompressed line, whose positions
-    carry the static compressions, it is the floor under any energy balance."""
+def energy_rounding(x: np.ndarray, line, t: float = 0.0, energy: float | None = None) -> float:
+    """How far ``line_potential_energy(x, line, t)`` (``energy``, if known) moves when the
+    displacements ``x`` (shape (N,)) move by their rounding, one unit in the last place
+    each: the sum over the contacts (walls included) of the force times the rounding of
+    the positions it spans, with the energy's own rounding. On a precompressed line,
+    whose positions carry the static compressions, it is the floor under any energy
+    balance. Only the pressed contacts are evaluated (a long line's are few)."""
     x = np.asarray(x, dtype=float)
-    eps = np.finfo(float).eps
     total = 0.0
     if line.n > 1:
-        force = line_contact_forces(x, line)
-        total += float(force @ (np.abs(x[:-1]) + np.abs(x[1:])))
+        delta = x[:-1] - x[1:]
+        if np.any(line.gap != 0.0):
+            delta = delta - line.gap
+        on = np.flatnonzero(delta > 0.0)
+        if on.size:
+            kappa = np.broadcast_to(np.asarray(line.stiffness, dtype=float), delta.shape)[on]
+            alpha = np.broadcast_to(np.asarray(line.alpha, dtype=float), delta.shape)[on]
+            force = kappa * delta[on] ** alpha
+            total += float(force @ (np.abs(x[on]) + np.abs(x[on + 1])))
     wl, wr = line.wall_displacement(t)
     for wall, delta, ends in ((line.left, float(wl) - x[0], abs(float(wl)) + abs(x[0])),
                               (line.right, x[-1] - float(wr), abs(x[-1]) + abs(float(wr)))):
         if wall is not None:
             total += float(contact_law(delta - wall.gap, wall.stiffness, wall.alpha)) * ends
-    return eps * (total + abs(float(line_potential_energy(x, line, t))))
+    if energy is None:
+        energy = float(line_potential_energy(x, line, t))
+    return float(np.finfo(float).eps * (total + abs(energy)))
 
 
 def baseline_energy(line) -> float:
