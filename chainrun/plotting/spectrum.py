@@ -68,9 +68,34 @@ def _hertz(axes, scaled, omega: np.ndarray, units: str) -> None:
 
 
 def _name(ds) -> str:
-    """The experiment and run a spectrum is of, from its attributes ("" if unknown)."""
+    """The experiment and run a spectrum is of, and what its line is (``views.describe``,
+    from the experiment file the spectrum keeps), from its attributes ("" if unknown)."""
     experiment, run_id = ds.attrs.get("experiment", ""), ds.attrs.get("run_id", "")
-    return experiment + (f" ({run_id})" if run_id and run_id != "run" else "")
+    name = experiment + (f" ({run_id})" if run_id and run_id != "run" else "")
+    line = _line(ds.attrs.get("config", ""), run_id or "run")
+    return "\n".join(filter(None, [name, line]))
+
+
+def _line(text: str, run_id: str) -> str:
+    """What the line of run ``run_id`` of the experiment file ``text`` is, in words
+    ("" where the text is not an experiment file this version reads)."""
+    from types import SimpleNamespace
+
+    from chainrun.config import parse_experiment
+    from chainrun.errors import ChainrunError
+    from chainrun.plotting.views import describe
+
+    for fmt in ("toml", "yaml"):
+        try:
+            specs = parse_experiment(text, fmt, to_run=False).runs(to_run=False)
+        except (ChainrunError, ValueError, TypeError):
+            continue
+        for spec in specs:
+            if spec.run_id == run_id:
+                run = SimpleNamespace(line=spec.line, units=spec.units,
+                                      parameters={"config_resolved": spec.config})
+                return describe(run, spec.overrides, width=90)
+    return ""
 
 
 def draw_spectrum(ds) -> Figure:

@@ -176,6 +176,9 @@ def test_an_si_figure_gives_the_frequency_in_hertz_beside_omega():
     (hertz,) = bands.child_axes
     assert modes.get_ylabel() == r"angular frequency $\omega$ (krad/s)"
     assert hertz.get_ylabel() == r"frequency $f = \omega / 2\pi$ (kHz)"
+    # titled by what the line is, read back from the experiment the spectrum keeps
+    title = figure.get_suptitle()
+    assert "N = 12 stainless steel spheres of 8 mm" in title and "precompressed 5 N" in title
     top = float(ds.omega.max())
     to_hertz = hertz._functions[0]
     assert to_hertz(top / 1e3) == pytest.approx(top / (2 * np.pi) / 1e3, rel=1e-12)
