@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "format_supported", "format_value",
-           "scale_for", "supported_format"]
+__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "format_supported",
+           "format_value", "format_with_error", "scale_for", "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
 PAPER = "paper units"
@@ -175,6 +175,19 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
 
 
 _SPEC = re.compile(r"(?P<head>[^.]*)\.(?P<digits>\d+)(?P<kind>[efg%])$")
+
+
+def format_with_error(value: float, error: float) -> tuple[str, str]:
+    """``value`` to the place of its ``error``'s second significant digit, and the error
+    to two digits (602.71 and 0.23, 0.8405088363 and 3.7e-09); without a finite error,
+    six digits and ""."""
+    if not (math.isfinite(error) and error > 0.0):
+        return f"{value:.6g}", ""
+    place = math.floor(math.log10(error)) - 1
+    if place < 0:
+        return f"{value:.{-place}f}", f"{error:.2g}"
+    step = 10.0 ** place
+    return f"{round(value / step) * step:.0f}", f"{round(error / step) * step:.0f}"
 
 
 def supported_format(fmt: str, value: float, spread: float) -> str:

@@ -87,23 +87,10 @@ def _balls(s, threshold: str) -> list[str]:
             f"impact speed, {threshold}), {s.left_behind} left behind"]
 
 
-def _with_error(value: float, error: float) -> tuple[str, str]:
-    """``value`` to the place of its ``error``'s second significant digit, and the error
-    to two digits (602.71 and 0.23, 0.8405088363 and 3.7e-09); without a finite error,
-    six digits and ""."""
-    if not (math.isfinite(error) and error > 0.0):
-        return f"{value:.6g}", ""
-    place = math.floor(math.log10(error)) - 1
-    if place < 0:
-        return f"{value:.{-place}f}", f"{error:.2g}"
-    step = 10.0 ** place
-    return f"{round(value / step) * step:.0f}", f"{round(error / step) * step:.0f}"
-
-
 def _pulse_lines(p) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
     the wave's speed when two sensors or more saw it."""
-    from chainrun.units import format_value, scale_for
+    from chainrun.units import format_value, format_with_error, scale_for
 
     # measured values keep their trailing zeros (31.700 N beside 33.317 N)
     def t(x):
@@ -131,12 +118,12 @@ def _pulse_lines(p) -> list[str]:
         v = abs(speed.value) if p.backward_speed.points else speed.value
         if p.speed_si is not None:
             scaled = scale_for("velocity", "si", [v])
-            value, error = _with_error(scaled(v), scaled(speed.error))
+            value, error = format_with_error(scaled(v), scaled(speed.error))
             value, error = f"{value} {scaled.unit}", (f" +- {error} {scaled.unit}"
                                                       if error else "")
         else:  # (a line without diameters: its speed in balls per unit of its time)
             per = "balls/s" if p.units == "si" else "balls per unit time"
-            value, error = _with_error(v, speed.error)
+            value, error = format_with_error(v, speed.error)
             value, error = f"{value} {per}", (f" +- {error}" if error else "")
         lines.append("wave speed " + (f"{way} " if p.backward_speed.points else "")
                      + f"{value}{error} (a fit through {speed.points} sensors' peak times"

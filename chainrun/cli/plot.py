@@ -46,15 +46,17 @@ def _draw_run(args):
 def _each_run(files, views, out, log):
     """(run file, files drawn) for each of ``files`` in order: the runs' views drawn on
     as many processes as there are cores (a sweep's runs are independent figures)."""
+    import multiprocessing
+
     tasks = [(path, views, out, log) for path in files]
     workers = min(len(tasks), os.cpu_count() or 1, MAX_PLOT_WORKERS)
-    if workers <= 1:
+    # (forked: the workers start with this process's imports, and draw in its style;
+    # where a system cannot fork, the runs are drawn here, one after another)
+    if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
         yield from map(_draw_run, tasks)
         return
     import concurrent.futures as cf
-    import multiprocessing
 
-    # (forked: the workers start with this process's imports, and draw in its style)
     with cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
         yield from pool.map(_draw_run, tasks)
 

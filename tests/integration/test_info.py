@@ -232,15 +232,6 @@ def test_a_checked_runs_velocities_show_the_digits_its_table_shows(tmp_path):
         assert value == table[ball], (ball, value, table[ball])
 
 
-def test_a_value_is_shown_to_its_errors_second_digit():
-    from chainrun.cli.info import _with_error
-
-    assert _with_error(602.706, 0.23) == ("602.71", "0.23")
-    assert _with_error(0.84050884, 3.7e-9) == ("0.8405088400", "3.7e-09")
-    assert _with_error(1234.5, 56.0) == ("1234", "56")
-    assert _with_error(589.809, float("nan")) == ("589.809", "")
-
-
 def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     """Sensors in a chain of steel beads struck at 0.5 m/s: each records the solitary
     wave, whose peak contact force is 0.63955 in the paper's units (0.640 printed in

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from chainrun.units import PAPER, axis_label, format_value, scale_for
+from chainrun.units import PAPER, axis_label, format_value, format_with_error, scale_for
 
 
 @pytest.mark.parametrize("quantity, values, factor, unit", [
@@ -41,3 +41,10 @@ def test_a_value_for_a_person():
     assert format_value(0.5, "velocity", "si") == "500 mm/s"
     assert format_value(6.17702, "time", "paper") == "6.177"
     assert format_value(math.inf, "time", "si") == "inf"
+
+
+def test_a_value_is_shown_to_its_errors_second_digit():
+    assert format_with_error(602.706, 0.23) == ("602.71", "0.23")
+    assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "3.7e-09")
+    assert format_with_error(1234.5, 56.0) == ("1234", "56")
+    assert format_with_error(589.809, float("nan")) == ("589.809", "")
