@@ -14,7 +14,10 @@ add up to 100%, to the run's energy error. On a driven line (a moving wall, forc
 prescribed in time) the shares are of the energy the line took up by the end: its
 impact energy (0 without strikers) plus the drives' work by then
 (``RunData.drive_energy``), which the same shares add up to; a line that took up no
-energy has none.
+energy has none. Where a driven line starts precompressed, the static load's work as
+its walls move (``physics.static_load_work``, F0 times the wall's displacement) is
+taken off both the drives' work and the contacts' energy: it swings with the wall's
+phase and is given back, and without it every share lies between 0 and 100%.
 """
 
 from __future__ import annotations
@@ -56,10 +59,13 @@ class RunSummary:
     ball with the largest forward (towards ball N) and backward final velocity, or
     None where no ball moves that way. ``events`` counts the logged events by
     ``EventKind`` name. ``impact`` is the impact energy, ``drive_work`` the drives'
-    work by the end (0 without drives), and ``energy`` the shares (``SHARES``) of
+    work by the end beyond the static load's (``physics.static_load_work``; 0 without
+    drives), and ``energy`` the shares (``SHARES``) of
     their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
     (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
     the run's conditioning check (``chainrun.check.Check``), None for a run without one.
+    ``static_load`` is the static load's work taken off the drives' work (0 unless the
+    line is driven and starts precompressed).
     ``walls`` is how many walls the line has (0, 1 or 2).
     """
 
@@ -103,6 +109,7 @@ class RunSummary:
     line: str
     check: Check | None = None
     walls: int = 0
+    static_load: float = 0.0
 
     @property
     def dissipated(self) -> float:
@@ -200,10 +207,13 @@ def summarize(run) -> RunSummary:
     back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
     impact = run.impact_energy
-    work = float(run.drive_energy)
+    # on a driven precompressed line, the static load's work as the walls move is given
+    # back as they return: taken off the drives' work and the contacts' energy alike
+    load = float(run.static_load_work(run.end_time)) if run.drive_energy else 0.0
+    work = float(run.drive_energy) - load
     taken = impact + work
     stored = (float(line_potential_energy(run.final_position, line, run.end_time))
-              - run.baseline_energy)
+              - run.baseline_energy - load)
     amounts = {name: float(line_kinetic_energy(np.where(mask, v, 0.0), line.mass))
                for name, mask in (("rebound", back), ("ejected", ahead),
                                   ("left behind", behind))}
@@ -244,6 +254,7 @@ def summarize(run) -> RunSummary:
         impact=impact,
         energy=energy,
         drive_work=work,
+        static_load=load,
         dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),

@@ -65,9 +65,11 @@ def _shares(s) -> str:
                        if name != "dissipated" or share)
     when = "" if s.terminal else f" at t = {format_value(s.end_time, 'time', s.units, 6)}"
     if s.drive_work:
+        load = (f" (beyond the static load's {format_value(s.static_load, 'energy', s.units)}"
+                f", which the walls' return gives back)" if s.static_load else "")
         return (f"of the energy taken up{when}, the impact's "
                 f"{format_value(s.impact, 'energy', s.units)} and the drives' work "
-                f"{format_value(s.drive_work, 'energy', s.units)}: {shares}")
+                f"{format_value(s.drive_work, 'energy', s.units)}{load}: {shares}")
     return f"of the impact energy {format_value(s.impact, 'energy', s.units)}{when}: {shares}"
 
 

@@ -350,8 +350,14 @@ def _energy(run, figure: Figure, axes) -> None:
     dissipated = obs["dissipated_energy"]
     work = obs.get("drive_work", np.zeros_like(kinetic))
     driven = bool(np.any(work))
-    if driven:  # (a precompressed line stores far more than a drive moves: its change)
-        stored = stored - stored[0]
+    load = np.zeros_like(kinetic)
+    if driven:
+        # the static load's work as the walls move (F0 w(t), given back as they
+        # return) is taken off the drives' work and the contacts' energy alike: it
+        # would swing across both, far above what the line takes up
+        load = run.static_load_work(run.times)
+        stored = stored - stored[0] - load
+        work = work - load
     total = kinetic + stored + dissipated - work
     label, scaled = axis_label("energy", "energy", run.units,
                                np.concatenate([kinetic, stored, total, work]))
@@ -362,13 +368,15 @@ def _energy(run, figure: Figure, axes) -> None:
     if np.any(run.line.force):
         contacts += ", less the forces' work"
     if driven:
-        contacts += ", since t = 0"
+        contacts += (", about the static state" if np.any(load) else ", since t = 0")
     axes.plot(t, scaled(kinetic), label="kinetic", gid="kinetic_energy")
     axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
     if np.any(dissipated):
         axes.plot(t, scaled(dissipated), label="dissipated", gid="dissipated_energy")
     if np.any(work):
-        axes.plot(t, scaled(work), label="the drives' work", gid="drive_work")
+        axes.plot(t, scaled(work), gid="drive_work",
+                  label="the drives' work, beyond the static load's" if np.any(load)
+                  else "the drives' work")
     axes.plot(t, scaled(total), label="sum less the drives' work" if np.any(work) else "sum",
               color="black", linestyle="-", linewidth=1.4, gid="total_energy")
     axes.set_ylabel(label)

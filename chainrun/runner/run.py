@@ -124,7 +124,8 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         momentum_error=d.momentum_error, energy_error=d.energy_error,
         wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
         final_velocity=sol.final_velocity,
-        dissipated=_share(sol.dissipated_energy, line, sol.drive_energy), units=spec.units,
+        dissipated=_share(sol.dissipated_energy, line, sol.drive_energy, sol.end_time),
+        units=spec.units,
         check=check, speed=_speed(line), driven=line.is_driven,
         energy_floor=d.energy_floor,
     )
@@ -161,11 +162,14 @@ def _speed(line) -> float:
     return float(np.max(np.abs(line.velocity), initial=0.0)) or 1.0
 
 
-def _share(dissipated: float, line, work: float = 0.0) -> float:
-    """``dissipated`` as a share of the energy the line took up: its impact energy,
-    plus the drives' ``work`` on a driven line (0 without either, or if none)."""
-    from chainrun.solver.physics import impact_energy
+def _share(dissipated: float, line, work: float = 0.0, end_time: float = 0.0) -> float:
+    """``dissipated`` as a share of the energy the line took up by ``end_time``: its
+    impact energy, plus on a driven line the drives' ``work`` beyond the static load's
+    (``physics.static_load_work``); 0 without either, or if none."""
+    from chainrun.solver.physics import impact_energy, static_load_work
 
+    if work:
+        work = work - float(static_load_work(line, end_time))
     taken = impact_energy(line) + work if dissipated else 0.0
     return dissipated / taken if taken > 0.0 else 0.0
 
@@ -189,7 +193,8 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         energy_error=float(d.get("energy_error", np.nan)),
         wall_time=float(d.get("wall_time", 0.0)), config_hash=spec.config_hash,
         message=run.message, final_velocity=run.final_velocity, skipped=True,
-        dissipated=_share(run.dissipated_energy, run.line, run.drive_energy), units=run.units,
+        dissipated=_share(run.dissipated_energy, run.line, run.drive_energy, run.end_time),
+        units=run.units,
         check=run.check, speed=_speed(run.line), driven=run.line.is_driven,
         energy_floor=float(d.get("energy_floor", 0.0)),
     )

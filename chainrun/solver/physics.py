@@ -241,6 +241,34 @@ def baseline_energy(line) -> float:
     return float(line_potential_energy(line.position, line, 0.0))
 
 
+def static_load_work(line, t) -> np.ndarray:
+    """The work the static load does on a line that starts at rest in its static state
+    (precompressed) as its walls move, by the times ``t``: each moving wall's static
+    force, its contact's at t = 0, times its displacement into the line since then.
+
+    It is the part of the drives' work that the contacts give back as the walls return
+    (F0 w(t), swinging with the wall's phase), and the same first-order part of the
+    contacts' energy above the static state: with it taken off both, the contacts'
+    energy left is that of the deformation about the static state, never negative (the
+    force laws are convex), and the drives' work left is what the line took up (0 where
+    no wall moves or the line starts unloaded)."""
+    t = np.asarray(t, dtype=float)
+    work = np.zeros(t.shape)
+    if not np.any(line.position):
+        return work
+    x = line.position
+    w0 = line.wall_displacement(0.0)
+    wt = line.wall_displacement(t)
+    # (the left wall pushes with +x as its displacement grows, the right one with -x)
+    for wall, delta, sign, start, now in (
+            (line.left, float(w0[0]) - x[0], 1.0, float(w0[0]), wt[0]),
+            (line.right, x[-1] - float(w0[1]), -1.0, float(w0[1]), wt[1])):
+        if wall is not None and wall.motion is not None:
+            force = float(contact_law(delta - wall.gap, wall.stiffness, wall.alpha))
+            work = work + sign * force * (np.asarray(now) - start)
+    return work[()]
+
+
 def impact_energy(line) -> float:
     """The energy an impact puts into ``line``: its initial kinetic energy, plus the
     energy of any initial overlap (its potential energy at t = 0 above

@@ -181,6 +181,13 @@ class RunData:
         ``potential_energy`` less this is the energy the impact left in the contacts."""
         return physics.baseline_energy(self.line)
 
+    def static_load_work(self, t) -> np.ndarray:
+        """The static load's work by the times ``t`` as the walls move, on a driven line
+        that starts precompressed (``physics.static_load_work``; 0 otherwise): the part
+        of the drives' work, and of the contacts' energy, that the walls' return gives
+        back."""
+        return physics.static_load_work(self.line, t)
+
     @property
     def units(self) -> str:
         """"paper" or "si": the units of every quantity in the file."""

@@ -463,3 +463,24 @@ def test_a_long_legend_stands_outside_the_axes(beads, tmp_path):
     axes = energy.axes[0].get_window_extent()
     below = energy.axes[0].get_legend().get_window_extent()
     assert below.y1 <= axes.y0 and axes.width >= 0.75 * energy.bbox.width
+
+
+def test_a_driven_precompressed_line_draws_what_it_took_up(tmp_path):
+    # A line under a static load of 1 shaken by 1e-6 (about (A omega)^2 = 1e-13 taken
+    # up): the load's work F0 w(t) (amplitude 1e-6) is off the drives' work and the
+    # contacts' energy, which stay at the scale of what the shaking puts in, never
+    # below 0 beyond the balance's rounding (about 2e-16).
+    from helpers import driven_sweep
+
+    text = driven_sweep("shaken", 6, [0.05], ramp=20.0, t_end=95.0).replace(
+        "[solver]", '[output.times]\nstart = 0.0\nstop = 95.0\nstep = 0.5\n[solver]')
+    out = simulate_text(tmp_path, text)
+    run = read_run(next(p for p in out.glob("*.h5") if p.name != "index.h5"))
+    with style(colour=True):
+        figure = draw_view(run, "energy")
+    assert figure.axes[0].get_ylabel() == "energy (paper units)"
+    work = artist(figure, "drive_work").get_ydata()
+    stored = artist(figure, "potential_energy").get_ydata()
+    assert 1e-14 < work.max() < 1e-11
+    assert work.min() > -1e-15 and stored.min() > -1e-15
+    assert "static load" in artist(figure, "drive_work").get_label()
