@@ -11,8 +11,9 @@ set by the model and how much by rounding and tolerance; it estimates the run's 
 and does not bound it (the check run has an error of its own, about a tenth as large
 where errors follow the tolerance: the run's is then about 1.1 times its spread, as
 the guide's "Which digits hold" measures). A ball *holds* when both
-its spreads are at most ``HOLD`` of the line's impact speed (the largest initial
-speed), in the run's units.
+its spreads are at most ``HOLD`` of the line's speed (``reference_speed``: the impact
+speed, the largest initial speed; on a line at rest, its driven walls' speed), in the
+run's units.
 
 Spreads of a separation velocity: NaN in both runs (a ball that never separated)
 agree, and have a spread of 0; NaN in one run only (the runs disagree on whether the
@@ -32,12 +33,27 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Check", "ENERGY_DOUBT", "HOLD", "MIN_RTOL", "check_rtol", "energy_doubt",
-           "short", "spread"]
+           "reference_speed", "short", "spread"]
 
 #: Smallest step tolerance a run may ask for (``solver.rtol``).
 MIN_RTOL = 1e-15
-#: A ball holds when its spreads are at most this share of the line's impact speed.
+#: A ball holds when its spreads are at most this share of the line's speed
+#: (``reference_speed``).
 HOLD = 1e-9
+
+
+def reference_speed(line) -> tuple[float, str]:
+    """The speed a line's spreads are measured against, and its name: a struck line's
+    impact speed (its largest initial speed); for a line at rest, its driven walls'
+    speed (``Drive.speed``: 2 pi f A, summed over a drive's sines); else 1, the unit
+    of velocity."""
+    impact = float(np.max(np.abs(line.velocity), initial=0.0))
+    if impact > 0.0:
+        return impact, "the impact speed"
+    drive = sum(w.motion.speed for w in line.walls if w is not None and w.motion is not None)
+    if drive > 0.0:
+        return float(drive), "the drive's speed"
+    return 1.0, "the unit of velocity"
 
 
 #: A run whose energy balance is off by more than this share of its energy (``|dE|/E``,
@@ -173,8 +189,9 @@ class Check:
         i = int(np.nanargmax(spreads))
         return i + 1, float(spreads[i])
 
-    def line(self, speed: float) -> str:
-        """One clause for a run's summary line, spreads relative to ``speed``.
+    def line(self, speed: float, name: str = "the impact speed") -> str:
+        """One clause for a run's summary line, spreads relative to ``speed`` (called
+        ``name``; ``reference_speed``).
 
         ``check (rtol 1e-13): 5 of 5 balls hold to 1e-9 of the impact speed, largest
         spread 6.1e-13 of it (ball 3)``
@@ -185,5 +202,5 @@ class Check:
         n = self.final_velocity_spread.size
         ball, largest = self.largest()
         relative = largest / speed if speed else largest
-        return (f"{head}: {self.holding(speed)} of {n} balls hold to {short(HOLD)} of the "
-                f"impact speed, largest spread {relative:.1e} of it (ball {ball})")
+        return (f"{head}: {self.holding(speed)} of {n} balls hold to {short(HOLD)} of "
+                f"{name}, largest spread {relative:.1e} of it (ball {ball})")

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from chainrun.analysis.derived import SIGNIFICANT
-from chainrun.check import Check
+from chainrun.check import Check, reference_speed
 from chainrun.solver import EventKind
 from chainrun.solver.model import strikers
 from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
@@ -65,7 +65,8 @@ class RunSummary:
     (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
     the run's conditioning check (``chainrun.check.Check``), None for a run without one.
     ``static_load`` is the static load's work taken off the drives' work (0 unless the
-    line is driven and starts precompressed).
+    line is driven and starts precompressed); ``reference`` the speed the check's
+    spreads are measured against, and its name (``chainrun.check.reference_speed``).
     ``walls`` is how many walls the line has (0, 1 or 2).
     """
 
@@ -110,6 +111,7 @@ class RunSummary:
     check: Check | None = None
     walls: int = 0
     static_load: float = 0.0
+    reference: tuple[float, str] = (1.0, "the impact speed")
 
     @property
     def dissipated(self) -> float:
@@ -255,6 +257,7 @@ def summarize(run) -> RunSummary:
         energy=energy,
         drive_work=work,
         static_load=load,
+        reference=reference_speed(line),
         dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),

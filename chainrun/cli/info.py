@@ -144,7 +144,7 @@ def _check(s) -> str:
     head = f"at rtol {short(c.rtol)} ({c.wall_time:.2f} s)"
     if not c.ok:
         return f"{head} FAILED ({c.outcome}): {c.message}"
-    speed = s.speed or 1.0
+    speed, name = s.reference
     n = c.final_velocity_spread.size
     hold = (f" ({format_value(HOLD * speed, 'velocity', s.units, 3)})"
             if s.units == "si" else "")
@@ -155,8 +155,8 @@ def _check(s) -> str:
         worst = (f"the largest spread is {format_value(largest, 'velocity', s.units, 3)}"
                  + (f" ({largest / speed:.1e} of it)" if s.units == "si" else "")
                  + f", ball {ball}")
-    return (f"{head}: {c.holding(speed)} of {n} balls hold to {short(HOLD)} of the impact "
-            f"speed{hold}; {worst}")
+    return (f"{head}: {c.holding(speed)} of {n} balls hold to {short(HOLD)} of {name}"
+            f"{hold}; {worst}")
 
 
 def render(s, sensors=()) -> str:

@@ -25,7 +25,8 @@ from chainrun.errors import ChainrunError, ConfigError
               help="Run each line a second time at a tenth of its rtol and store the "
                    "spread of every ball's final and separation velocities "
                    "(results/final_velocity_spread); the summary says how many balls "
-                   "hold to 1e-9 of the impact speed. As solver.check = true.")
+                   "hold to 1e-9 of the impact speed (a driven line at rest: of "
+                   "its wall's speed 2 pi f A). As solver.check = true.")
 @click.option("--check-outdir", type=click.Path(file_okay=False, path_type=Path),
               help="With the check, also write each check run's own run file (and an "
                    "index) into this folder, so that any number derived from the runs "
@@ -114,7 +115,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     Which digits hold: --check (or solver.check = true) runs each line again at a
     tenth of its rtol (ten times it where a tenth is below 1e-15) and stores each
     ball's spread, |v(rtol) - v(check rtol)|; a ball holds when its spreads are at
-    most 1e-9 of the impact speed. A clean line holds on every ball; a cascade or a
+    most 1e-9 of the impact speed (of the drive's speed, 2 pi f A, on a driven line at
+    rest). A clean line holds on every ball; a cascade or a
     disordered line may not, and its summary line says so. It doubles the solver's
     time.
 

@@ -60,7 +60,7 @@ def run_line(run) -> str:
                f"{'energy taken up' if run.driven else 'impact energy'}, "
                if run.dissipated else "")
             + f"{run.wall_time:.2f} s"
-            + (f"; {run.check.line(run.speed)}" if run.check is not None else ""))
+            + (f"; {run.check.line(run.speed, run.speed_name)}" if run.check is not None else ""))
     if run.skipped:
         return f"{run.run_id}: skipped, file up to date ({text})"
     return f"{run.run_id}: {text}"

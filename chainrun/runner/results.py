@@ -40,7 +40,8 @@ class RunSummary:
     dissipated: float = 0.0  # share of the energy taken up that the damping took
     units: str = "paper"  # the run's units: "paper" or "si"
     check: Check | None = None  # the conditioning check, if the run had one
-    speed: float = 1.0  # the line's impact speed (largest initial speed)
+    speed: float = 1.0  # what the check's spreads are measured against (reference_speed)
+    speed_name: str = "the impact speed"
     driven: bool = False  # the line is driven: it took up its impact and the drives' work
     energy_floor: float = 0.0  # the energy_error rounding alone can leave (Diagnostics)
 

@@ -126,7 +126,7 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         final_velocity=sol.final_velocity,
         dissipated=_share(sol.dissipated_energy, line, sol.drive_energy, sol.end_time),
         units=spec.units,
-        check=check, speed=_speed(line), driven=line.is_driven,
+        check=check, **_speed(line), driven=line.is_driven,
         energy_floor=d.energy_floor,
     )
 
@@ -157,9 +157,13 @@ def _check(spec: RunSpec, line, sol, check_outdir, hook) -> Check:
     return Check.between(sol, other, checked.rtol)
 
 
-def _speed(line) -> float:
-    """The line's impact speed: its largest initial speed (1 for a line at rest)."""
-    return float(np.max(np.abs(line.velocity), initial=0.0)) or 1.0
+def _speed(line) -> dict:
+    """The speed the line's spreads are measured against, and its name
+    (``chainrun.check.reference_speed``), as RunSummary's fields."""
+    from chainrun.check import reference_speed
+
+    speed, name = reference_speed(line)
+    return {"speed": speed, "speed_name": name}
 
 
 def _share(dissipated: float, line, work: float = 0.0, end_time: float = 0.0) -> float:
@@ -195,6 +199,6 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         message=run.message, final_velocity=run.final_velocity, skipped=True,
         dissipated=_share(run.dissipated_energy, run.line, run.drive_energy, run.end_time),
         units=run.units,
-        check=run.check, speed=_speed(run.line), driven=run.line.is_driven,
+        check=run.check, **_speed(run.line), driven=run.line.is_driven,
         energy_floor=float(d.get("energy_floor", 0.0)),
     )

@@ -113,3 +113,21 @@ def test_a_number_shows_no_digit_beyond_its_spread(value, spread_, text):
 ])
 def test_a_quoted_value_is_cut_to_its_spread(fmt, value, spread_, text):
     assert supported_format(fmt, value, spread_) == text
+
+
+def test_spreads_are_measured_against_the_impact_or_else_the_drive_speed():
+    # a struck line: its largest initial speed; a line at rest shaken by a wall of
+    # amplitude A at f: 2 pi f A (the wall's largest speed); a line at rest and not
+    # driven: the unit
+    from chainrun.check import reference_speed
+    from chainrun.solver import Drive, Line, Wall
+
+    assert reference_speed(Line.make(5, alpha=1.5, velocity=[0.3, -0.7, 0, 0, 0])) \
+        == (0.7, "the impact speed")
+    shaken = Line.make(4, alpha=1.5, velocity=np.zeros(4), right=Wall(1.0),
+                       left=Wall(1.0, motion=Drive.sine(2e-8, 3000.0, 1e-3)))
+    speed, name = reference_speed(shaken)
+    assert speed == pytest.approx(2 * math.pi * 3000.0 * 2e-8, rel=1e-15)
+    assert name == "the drive's speed"
+    assert reference_speed(Line.make(4, alpha=1.5, velocity=np.zeros(4))) \
+        == (1.0, "the unit of velocity")
