@@ -13,6 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from chainrun.api.runs import _UNITS, _experiment
+from chainrun.errors import ChainrunError
 from chainrun.paths import index_file
 
 
@@ -49,7 +50,8 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     Raises
     ------
     chainrun.errors.ChainrunError
-        For a run without force sensors (naming the run, in a sweep);
+        For a run without force sensors, or a driven one (whose steady response
+        ``transmission`` measures), naming the run in a sweep;
         ``chainrun.errors.StoreError`` for a file or folder that cannot be read.
 
     Examples
@@ -81,7 +83,18 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     path = Path(run) if isinstance(run, (str, Path)) else None
     if path is not None and path.is_dir():
         return pulses(open_sweep(path))
+    if path is not None:
+        from chainrun.store import read_run
+
+        run = read_run(path)
+    if run.line.is_driven:
+        raise ChainrunError(f"pulses: {_DRIVEN}")
     return _as_dataset(measure_pulses(run))
+
+
+#: Why a driven run has no pulses to measure, and what measures it instead.
+_DRIVEN = ("this line is driven (a wall moves, or a force acts, in time): it has a "
+           "steady response, not a first pulse; chainrun.transmission measures that")
 
 
 def _run_pulses(run, name: str | None = None):
@@ -89,12 +102,13 @@ def _run_pulses(run, name: str | None = None):
     import numpy as np
 
     from chainrun.analysis.pulse import measure_sensors
-    from chainrun.errors import ChainrunError
 
+    where = f"pulses: run {name}" if name is not None else "pulses"
     if "sensor_force" not in run:
-        where = f"pulses: run {name}" if name is not None else "pulses"
         raise ChainrunError(f"{where}: no force sensors in this run; give "
                             "output.sensors and output.sensor_dt to record them")
+    if "wall_motion_amplitude" in run or float(run.attrs.get("final_drive_work", 0.0)):
+        raise ChainrunError(f"{where}: {_DRIVEN}")
     # a run of a sweep has the sweep's samples: NaN where it took none (a run that
     # ended sooner than another, or one sampled at other times)
     run = run.dropna("sample", how="all", subset=["sensor_force"])

@@ -283,6 +283,12 @@ def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
     assert "the left wall moves by 10 nm sin(2 pi f t), f = 2 kHz, ramp 1 ms" in text
     assert "pulses" not in text
     steady = chainrun.transmission(path)
+    # and the pulses' measures refuse it, for its file, its Dataset and its folder
+    from chainrun.errors import ChainrunError
+
+    for run in (path, chainrun.open_run(path), out):
+        with pytest.raises(ChainrunError, match="driven .* chainrun.transmission"):
+            chainrun.pulses(run)
     for ball in (1, 10, 20):
         a = float(steady.amplitude.sel(sensor=ball, harmonic=1)) * 1e3
         line = next(s for s in text.splitlines() if f"ball {ball}: amplitude" in s)
