@@ -87,7 +87,7 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
         from chainrun.store import read_run
 
         run = read_run(path)
-    if run.line.is_driven:
+    if getattr(run, "line", None) is not None and run.line.is_driven:
         raise ChainrunError(f"pulses: {_DRIVEN}")
     return _as_dataset(measure_pulses(run))
 
