@@ -264,9 +264,24 @@ def measure(run, *, harmonics: int = HARMONICS, start: float | None = None,
         raise ChainrunError("transmission: the sensors have fewer than two samples")
     dt = float(np.min(np.diff(t)))
     if harmonics * frequency >= 0.5 / dt:
-        raise ChainrunError(f"harmonics: {harmonics} times the drive's frequency is above "
-                            f"the sensors' Nyquist frequency 1/(2 sensor_dt) = "
-                            f"{0.5 / dt:.6g}; sample faster or fit fewer harmonics")
+        from chainrun.units import format_value
+
+        def hz(f):
+            return format_value(f, "frequency", units)
+        raise ChainrunError(f"harmonics: {harmonics} times the drive's frequency "
+                            f"{hz(frequency)} is above the sensors' Nyquist frequency "
+                            f"1/(2 sensor_dt) = {hz(0.5 / dt)}; sample faster (a sensor_dt "
+                            f"below {format_value(0.5 / (harmonics * frequency), 'time', units)})"
+                            f" or fit fewer harmonics (harmonics={harmonics - 1})"
+                            if harmonics > 1 else
+                            f"harmonics: the drive's frequency {hz(frequency)} is above the "
+                            f"sensors' Nyquist frequency 1/(2 sensor_dt) = {hz(0.5 / dt)}; "
+                            f"sample faster (a sensor_dt below "
+                            f"{format_value(0.5 / frequency, 'time', units)})")
+    if not amplitude:
+        side = ("left", "right")[wall]
+        raise ChainrunError(f"transmission: the driven wall does not move "
+                            f"(walls.{side}.motion.amplitude is 0)")
     if start is None:
         start = ramp + 0.5 * (float(t[-1]) - ramp)
     begin, end, periods = fit_window(t, frequency, start, periods)

@@ -4,8 +4,10 @@ A length typed in millimetres in an SI file (``diameter = 20``) is a valid line 
 20 m spheres of 33,000 t each, and it runs; so does a wall 5 m away, or an overlap deeper
 than a bead. Such a run ends well and answers a question nobody asked, so the command
 says so before it runs (``doubts``), naming the key, with what the value means and what
-was probably meant. Only lines of spheres in SI units are judged: the paper's units
-and lines of masses and stiffnesses have no scale to judge a length against.
+was probably meant. Lengths are judged on lines of spheres in SI units only: the
+paper's units and lines of masses and stiffnesses have no scale to judge them against.
+A moving wall is judged in any units: an amplitude of 0 (the wall does not move), and
+force sensors too slow to follow it.
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ import numpy as np
 
 from chainrun.units import format_value
 
-__all__ = ["doubts", "LARGEST_DIAMETER", "FARTHEST_GAP", "DEEPEST_OVERLAP"]
+__all__ = ["doubts", "LARGEST_DIAMETER", "FARTHEST_GAP", "DEEPEST_OVERLAP",
+           "SAMPLES_PER_PERIOD"]
 
 #: Spheres wider than this (m) are reported: a diameter in millimetres typed as metres.
 LARGEST_DIAMETER = 1.0
@@ -23,6 +26,10 @@ FARTHEST_GAP = 10.0
 #: Overlaps deeper than this share of the smaller diameter are reported: Hertz's law is
 #: for compressions small against the spheres (and one of a whole diameter is none).
 DEEPEST_OVERLAP = 0.1
+#: Force sensors that sample a moving wall's sine this many times a period or fewer are
+#: reported: ``chainrun.transmission`` fits its frequency and two harmonics, the third
+#: below the sensors' Nyquist frequency (more than 6 samples a period).
+SAMPLES_PER_PERIOD = 6
 
 
 def doubts(specs) -> list[str]:
@@ -30,11 +37,38 @@ def doubts(specs) -> list[str]:
     however many runs share it."""
     seen: dict[str, None] = {}
     for spec in specs:
-        if spec.units != "si":
+        if spec.is_paper:
             continue
-        for line in _line_doubts(spec.line):
+        found = _drive_doubts(spec) + (_line_doubts(spec.line) if spec.units == "si" else [])
+        for line in found:
             seen.setdefault(line)
     return list(seen)
+
+
+def _drive_doubts(spec) -> list[str]:
+    """A moving wall that does not move, and sensors too slow to follow one."""
+    out = []
+    for side, wall in (("left", spec.line.left), ("right", spec.line.right)):
+        if wall is None or wall.motion is None:
+            continue
+        drive = wall.motion
+        if drive.size == 0.0:
+            out.append(f"walls.{side}.motion.amplitude: 0, so the wall does not move and "
+                       f"the line stays at rest")
+            continue
+        if not spec.sensors or not spec.sensor_dt or drive.times is not None:
+            continue
+        f = max(s.frequency for s in drive.sines)
+        per = 1.0 / (f * spec.sensor_dt)
+        if per <= SAMPLES_PER_PERIOD:
+            def fmt(x, q):
+                return format_value(float(x), q, spec.units)
+            out.append(f"output.sensor_dt: {fmt(spec.sensor_dt, 'time')} samples the "
+                       f"{side} wall's {fmt(f, 'frequency')} {per:.2g} times a period; "
+                       f"chainrun.transmission fits it and two harmonics, which needs "
+                       f"more than {SAMPLES_PER_PERIOD} (a sensor_dt below "
+                       f"{fmt(1.0 / (SAMPLES_PER_PERIOD * f), 'time')})")
+    return out
 
 
 def _length(x: float) -> str:

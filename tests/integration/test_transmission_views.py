@@ -125,5 +125,19 @@ def test_runs_without_a_sine_or_sensors_are_refused_in_one_line(tmp_path):
                               solver={"t_end": 5.0}, output={"sensors": [2], "sensor_dt": 0.1})
     with pytest.raises(ChainrunError, match="not one whole period"):
         chainrun.transmission(short)
-    with pytest.raises(ChainrunError, match="Nyquist"):
+    # 20 harmonics of 0.3 reach 6, beyond 1 / (2 * 0.1) = 5: the frequencies said, and
+    # the sampling that would do, 1 / (2 * 20 * 0.3) = 0.08333
+    with pytest.raises(ChainrunError, match=r"20 times the drive's frequency 0.3 is above "
+                                            r"the sensors' Nyquist frequency 1/\(2 sensor_dt\)"
+                                            r" = 5; sample faster \(a sensor_dt below "
+                                            r"0.08333\) or fit fewer harmonics"):
         chainrun.transmission(short, harmonics=20, start=0.0)
+    from chainrun.errors import ChainrunWarning
+
+    with pytest.warns(ChainrunWarning, match="the wall does not move"):
+        still_wall = chainrun.simulate(
+            chain={"n": 4, "k": 0, "alpha": 1.5, "precompression": 1.0},
+            walls={"left": {"motion": {"amplitude": 0.0, "frequency": 0.3}}, "right": {}},
+            solver={"t_end": 5.0}, output={"sensors": [2], "sensor_dt": 0.1})
+    with pytest.raises(ChainrunError, match=r"does not move \(walls.left.motion.amplitude is 0\)"):
+        chainrun.transmission(still_wall)

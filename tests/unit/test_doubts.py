@@ -58,6 +58,48 @@ def test_an_overlap_deeper_than_hertz_holds_is_named(tmp_path):
                            "the diameter") and line.endswith("(and 8 more)")
 
 
+SHAKEN = """name = "shaken"
+[chain]
+n = 6
+k = 0
+alpha = 1.5
+precompression = 1.0
+[walls.left]
+motion = {{amplitude = {amplitude}, frequency = {frequency}}}
+[walls.right]
+[output]
+sensors = [1, 6]
+sensor_dt = {sensor_dt}
+[solver]
+t_end = 100.0
+"""
+
+
+def shaken_doubts(tmp_path, amplitude=1e-6, frequency=0.05, sensor_dt=0.5):
+    path = tmp_path / "shaken.toml"
+    path.write_text(SHAKEN.format(amplitude=amplitude, frequency=frequency,
+                                  sensor_dt=sensor_dt))
+    return doubts(sweep_specs(load_experiment(path)))
+
+
+def test_a_shaken_line_sampled_well_raises_no_doubt(tmp_path):
+    # 40 samples a period (paper units: a line of masses is judged for its drive too)
+    assert shaken_doubts(tmp_path) == []
+
+
+def test_a_wall_that_does_not_move_is_named(tmp_path):
+    (line,) = shaken_doubts(tmp_path, amplitude=0.0)
+    assert line.startswith("walls.left.motion.amplitude: 0, so the wall does not move")
+
+
+def test_sensors_too_slow_for_the_drive_are_named(tmp_path):
+    # f = 0.05 sampled every 4: 5 samples a period, fewer than the 7 a fit of three
+    # harmonics needs; below 1 / (6 f) = 3.333 it would do
+    (line,) = shaken_doubts(tmp_path, sensor_dt=4.0)
+    assert line.startswith("output.sensor_dt: 4 samples the left wall's 0.05 5 times a period")
+    assert line.endswith("(a sensor_dt below 3.333)")
+
+
 def test_a_far_off_energy_balance_is_a_doubt():
     assert energy_doubt(1e-11) is None and energy_doubt(ENERGY_DOUBT) is None
     assert energy_doubt(2.3e-4).startswith("its energy balance is off by 2.3e-04")
