@@ -25,6 +25,16 @@ from chainrun.solver.drive import Drive, Sine
 
 #: The keys of a sine of a drive (amplitude, frequency in cycles per unit of time, ramp).
 SINE_KEYS = ("amplitude", "frequency", "ramp")
+#: What a required key of a sine is, by the drive's quantity, for the message that asks
+#: for it.
+_MEANING = {
+    ("amplitude", "displacement"): "the sine's amplitude A, the wall's largest "
+                                   "displacement from its place; m in SI",
+    ("amplitude", "force"): "the sine's amplitude, the force's largest value; N in SI",
+    ("frequency", "displacement"): "the sine's frequency f, in cycles per unit of time "
+                                   "(Hz in SI)",
+    ("frequency", "force"): "the sine's frequency f, in cycles per unit of time; Hz in SI",
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +150,7 @@ def _drive_table(table: Any, sub: tuple[str, ...], base_dir: str, what: str,
                              ("ramp", 0.0, False)):
         if key not in table:
             if key != "ramp":
-                issues.append(Issue("required", sub + (key,)))
+                issues.append(Issue(f"required ({_MEANING[key, what]})", sub + (key,)))
             continue
         x, found = _number_issue(table, key, sub, low, strict)
         issues += found

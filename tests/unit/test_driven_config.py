@@ -101,7 +101,12 @@ def test_a_frequency_sweep(tmp_path):
      "walls.left.motion[1].frequncy: unknown key (did you mean 'frequency'?)"),
     (dict(left="motion = [{amplitude = 0.01, frequency = 2.0, ramp = -1}]"),
      "walls.left.motion[0].ramp: must be >= 0, got -1"),
-    (dict(left="motion = {frequency = 2.0}"), "walls.left.motion.amplitude: required"),
+    (dict(left="motion = {frequency = 2.0}"),
+     "walls.left.motion.amplitude: required (the sine's amplitude A, the wall's largest "
+     "displacement from its place; m in SI)"),
+    (dict(chain="drive = [{ball = 1, amplitude = 0.1}]"),
+     "chain.drive[0].frequency: required (the sine's frequency f, in cycles per unit of "
+     "time; Hz in SI)"),
     (dict(left="motion = 3"),
      "walls.left.motion: expected a table {amplitude, frequency, ramp} or {file}, got 3"),
     (dict(left='motion = {file = "drive.csv", amplitude = 1.0}'),
