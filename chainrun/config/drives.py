@@ -31,8 +31,8 @@ _MEANING = {
     ("amplitude", "displacement"): "the sine's amplitude A, the wall's largest "
                                    "displacement from its place; m in SI",
     ("amplitude", "force"): "the sine's amplitude, the force's largest value; N in SI",
-    ("frequency", "displacement"): "the sine's frequency f, in cycles per unit of time "
-                                   "(Hz in SI)",
+    ("frequency", "displacement"): "the sine's frequency f, in cycles per unit of time; "
+                                   "Hz in SI",
     ("frequency", "force"): "the sine's frequency f, in cycles per unit of time; Hz in SI",
 }
 
