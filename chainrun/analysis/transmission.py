@@ -404,5 +404,8 @@ def measure_sweep(runs, **options) -> xr.Dataset:
     curve = curve.assign_coords(
         frequency=("frequency", f[order], first["frequency"].attrs),
         run=("frequency", [ids[i] for i in order]))
-    return xr.merge([curve, spectrum], combine_attrs="override").assign_attrs(
-        run_id="", experiment=first.attrs.get("experiment", ""))
+    # (the runs' ids are the coordinate run: the curve is of no one run)
+    out = xr.merge([curve, spectrum], combine_attrs="override").assign_attrs(
+        experiment=first.attrs.get("experiment", ""))
+    out.attrs.pop("run_id", None)
+    return out

@@ -28,6 +28,7 @@ def test_a_folder_its_dataset_and_a_run_give_the_same_transmission(sweep):
     curve = chainrun.transmission(sweep)
     assert curve.frequency.values.tolist() == [0.2, 0.3, 0.45]        # sorted
     assert curve.run.values.tolist() == [f"left_motion_frequency={f}" for f in (0.2, 0.3, 0.45)]
+    assert "run_id" not in curve.attrs and curve.attrs["experiment"] == "shaken"  # of no one run
     assert curve.transmission.dims == ("frequency", "sensor", "harmonic")
     same = chainrun.transmission(chainrun.open_sweep(sweep))
     np.testing.assert_array_equal(same.transmission.values, curve.transmission.values)
