@@ -120,10 +120,40 @@ def _drawn(table, quantity: str, units: str) -> str | None:
     return f"lognormal, median {value(table['median'])}, sigma {table['sigma']:g}"
 
 
+def _driven(subject: str, drive, quantity: str, units: str, swept=()) -> str:
+    """``subject`` (``"left wall driven"``) and what drives it (a ``Drive``, or a tuple of
+    its ``Sine`` terms), in the run's units: each sine's amplitude (a ``quantity``) at
+    its frequency and its ramp (``left wall driven 10 nm at 5.5 kHz (1 ms ramp)``), less
+    the keys ``swept`` (``amplitude``, ``frequency``, ``ramp``: they differ from run to
+    run); samples by their number and their last time."""
+    def value(x, q):
+        return format_value(float(x), q, units)
+    if not isinstance(drive, tuple) and drive.times is not None:
+        return (f"{subject} through {drive.times.size} samples to "
+                f"t = {value(drive.times[-1], 'time')}")
+    si = units == "si"
+    terms = []
+    for sine in drive if isinstance(drive, tuple) else drive.sines:
+        words = []
+        if "amplitude" not in swept:
+            amplitude = value(sine.amplitude, quantity)
+            words.append(amplitude if si else f"amplitude {amplitude}")
+        if "frequency" not in swept:
+            words.append(f"at {'' if si else 'frequency '}{value(sine.frequency, 'frequency')}")
+        if sine.ramp and "ramp" not in swept:
+            ramp = value(sine.ramp, "time")
+            words.append(f"({ramp} ramp)" if si else f"(ramp {ramp})")
+        terms.append(" ".join(words))
+    words = " + ".join(t for t in terms if t)
+    if words and "amplitude" not in swept:  # "a force of 10 mN", "with amplitude 0.1"
+        words = ("with " if not si else "of " if quantity == "force" else "") + words
+    return f"{subject} {words}" if words else subject
+
+
 def describe(run, varying=(), width: int | None = None) -> str:
     """What the line of a run is, in a line: its balls (material, diameter), strikers
-    and speed, contact law, the balls' damping, each wall with its own, and
-    precompression; what the swept keys
+    and speed, contact law, the balls' damping, each wall with its own, precompression,
+    and what drives it (a wall's motion, forces on balls); what the swept keys
     ``varying`` set is left out (it differs from run to run). With ``width``, wrapped
     into lines of about that many characters between its parts."""
     line, units = run.line, run.units
@@ -187,6 +217,20 @@ def describe(run, varying=(), width: int | None = None) -> str:
         parts += [f"wall {side}{how}" for side, how in sides.items()]
     if "precompression" in config and "precompression" not in varying:
         parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
+    # what drives the line: the experiment, as the strikers are a struck line's
+    for side, wall in (("left", line.left), ("right", line.right)):
+        if wall and wall.motion is not None:
+            parts.append(_driven(f"{side} wall driven", wall.motion, "position", units,
+                                 {key.rpartition(".")[2] for key in swept
+                                  if key.startswith(f"walls.{side}.motion.")}))
+    sines = {}  # (the sines on one ball add up: one force of their sum)
+    for ball, drive in line.drives:
+        if drive.times is None:
+            sines.setdefault(ball, []).extend(drive.sines)
+        else:
+            parts.append(_driven(f"ball {ball + 1} driven by a force", drive, "force", units))
+    parts += [_driven(f"ball {ball + 1} driven by a force", tuple(each), "force", units)
+              for ball, each in sines.items()]
     parts = [p for p in parts if p]
     if width is None:
         return ", ".join(parts)
