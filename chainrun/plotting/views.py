@@ -29,7 +29,7 @@ from matplotlib.ticker import MaxNLocator
 
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
-from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, scale_for
+from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, law_unit, scale_for
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
            "draw_view"]
@@ -107,17 +107,40 @@ def _symlog(axes, values) -> None:
     axes.set_ylim(2.0 * bottom if bottom < 0.0 else 0.0, 2.0 * top if top > 0.0 else 0.0)
 
 
-def _drawn(table, quantity: str, units: str) -> str | None:
+def _drawn(table, quantity: str, units: str, unit: str = "") -> str | None:
     """How a key's random values are drawn (``"uniform 1-3 kg"``), from its generator
-    table in the resolved config; None for values that are not drawn at random."""
+    table in the resolved config; None for values that are not drawn at random. A
+    ``quantity`` without a prefixed unit (a stiffness) is written to 4 digits, ``unit``
+    after them."""
     if not isinstance(table, dict) or "random" not in table:
         return None
     def value(x):
         return (format_value(float(x), quantity, units) if quantity != "stiffness"
                 else f"{float(x):.4g}")
+    after = f" {unit}" if unit else ""
     if table["random"] == "uniform":
-        return f"uniform {value(table['low'])}-{value(table['high'])}"
-    return f"lognormal, median {value(table['median'])}, sigma {table['sigma']:g}"
+        return f"uniform {value(table['low'])}-{value(table['high'])}{after}"
+    return f"lognormal, median {value(table['median'])}{after}, sigma {table['sigma']:g}"
+
+
+def _masses(table, mass: np.ndarray, units: str) -> str | None:
+    """The balls' masses in brief, each with its unit: how they are drawn at random, the
+    values of a repeating pattern in the line's order (``30 g / 10 g alternating``), or
+    their range (``10 g-30 g``); None where every ball has one mass."""
+    drawn = _drawn(table, "mass", units)
+    if drawn:
+        return drawn
+    if np.all(mass == mass[0]):
+        return None
+    def value(x):
+        return format_value(float(x), "mass", units)
+    pattern = table.get("pattern") if isinstance(table, dict) and "impurity" not in table \
+        else None
+    if pattern and len(pattern) < mass.size and all(isinstance(x, (int, float))
+                                                    for x in pattern):
+        return " / ".join(map(value, pattern)) + (" alternating" if len(pattern) == 2
+                                                  else " repeating")
+    return f"{value(mass.min())}-{value(mass.max())}"
 
 
 def _driven(subject: str, drive, quantity: str, units: str, swept=()) -> str:
@@ -174,19 +197,20 @@ def describe(run, varying=(), width: int | None = None) -> str:
                      + ("" if "diameter" in varying else f" of {size}"))
     else:
         parts.append("" if "n" in varying else f"N = {line.n}")
-        drawn = _drawn(config.get("mass"), "mass", units)
-        if drawn:
-            parts.append(f"masses {drawn}")
-        elif not np.all(line.mass == line.mass[0]):
-            parts.append(f"masses {line.mass.min():.3g}-{line.mass.max():.3g}")
-    drawn = _drawn(config.get("stiffness"), "stiffness", units)
+        masses = _masses(config.get("mass"), np.asarray(line.mass), units)
+        if masses:
+            parts.append(f"masses {masses}")
+    drawn = _drawn(config.get("stiffness"), "stiffness", units,
+                   law_unit("stiffness", line.alpha, units) if units == "si" else "")
     if drawn:
         parts.append(f"stiffnesses {drawn}")
     moving = line.velocity != 0.0
     k = line.n if moving.all() else int(np.argmin(moving))
     if moving.any():
         speed = format_value(float(np.max(np.abs(line.velocity))), "velocity", units)
-        strikers = "" if "k" in varying else f"K = {k}"
+        # the paper's K on its own line; elsewhere K is as often a contact's stiffness
+        strikers = ("" if "k" in varying or k == 0 else f"K = {k}" if line.is_paper
+                    and units != "si" else f"{k} striker{'s' * (k != 1)}")
         at = "" if units != "si" or "speed" in varying else \
             f"at {speed}" if strikers else f"struck at {speed}"
         parts.append(" ".join(p for p in (strikers, at) if p))

@@ -368,7 +368,7 @@ def test_a_title_gives_each_wall_its_own_restitution(beads):
     assert describe(run, ["walls.right.restitution"]).endswith(
         "restitution 0.8 (Tsuji), wall right")
     assert describe(run, ["chain.restitution"]).endswith(
-        "K = 1 at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
+        "1 striker at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
 
 
 def test_a_wrapped_legend_label_keeps_equations_and_units_whole():

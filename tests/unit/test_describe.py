@@ -91,3 +91,49 @@ t_end = 100.0
     (run,) = runs(text)
     assert describe(run).endswith(
         "left wall driven with amplitude 0.01 at frequency 0.2 (ramp 50)")
+
+
+MASSES = """name = "masses"
+units = "si"
+[chain]
+n = 24
+k = 1
+speed = 0.5
+alpha = 1.5
+mass = {mass}
+stiffness = {stiffness}
+[solver]
+t_end = 1.0e-3
+"""
+
+
+def test_masses_are_given_with_their_unit_and_pattern():
+    (run,) = runs(MASSES.format(mass="{pattern = [0.03, 0.01]}", stiffness="5.0e9"))
+    assert describe(run) == ("N = 24, masses 30 g / 10 g alternating, 1 striker at "
+                             "500 mm/s, Hertz contacts")
+    (run,) = runs(MASSES.format(mass="{pattern = [0.01, 0.02, 0.03]}", stiffness="5.0e9"))
+    assert describe(run).startswith("N = 24, masses 10 g / 20 g / 30 g repeating,")
+    # other unequal masses by their range
+    (run,) = runs(MASSES.format(mass="{taper = 0.9, start = 0.03}", stiffness="5.0e9"))
+    low = 0.03 * 0.9 ** 23  # the 24th ball's: 2.657 g
+    assert describe(run).startswith(f"N = 24, masses {low * 1e3:.4g} g-30 g,")
+
+
+def test_random_stiffnesses_carry_their_unit():
+    (run,) = runs(MASSES.format(
+        mass="0.01", stiffness="{random = 'uniform', low = 1.0e9, high = 5.0e9, seed = 1}"))
+    assert describe(run) == ("N = 24, stiffnesses uniform 1e+09-5e+09 N m-1.5, 1 striker "
+                             "at 500 mm/s, Hertz contacts")
+
+
+def test_strikers_are_counted_in_words_but_on_the_papers_line():
+    text = MASSES.format(mass="0.01", stiffness="5.0e9").replace("k = 1", "k = 3")
+    (run,) = runs(text)
+    assert describe(run) == "N = 24, 3 strikers at 500 mm/s, Hertz contacts"
+    # the paper's own line, in its units, keeps the paper's K
+    (run,) = runs('name = "paper"\n[chain]\nn = 5\nk = 2\nalpha = 1.5\n')
+    assert describe(run) == "N = 5, K = 2, Hertz contacts"
+    # a line in the paper's units that is not the paper's
+    (run,) = runs('name = "general"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n'
+                  'mass = {pattern = [1.0, 0.5]}\n')
+    assert describe(run) == "N = 5, masses 1 / 0.5 alternating, 1 striker, Hertz contacts"
