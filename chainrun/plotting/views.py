@@ -66,23 +66,54 @@ def _law(alpha: np.ndarray) -> str:
 _LEGEND_INSIDE = 4
 _LEGEND_LABEL = 24
 _LEGEND_WRAP = 30
+#: a legend below the axes takes a column for each label where they are no longer in
+#: all than this many characters, else two
+_LEGEND_ROW = 40
+#: the gid of a legend inside the axes (``_clear_of_curves`` moves it if it hides one)
+_INSIDE = "legend/inside"
 
 
 def _legend(axes) -> None:
-    """The axes' legend: inside them where it is short; a few long labels below them, in
-    two columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP``
-    characters (a longer line would take the figure's width from the axes)."""
+    """The axes' legend: inside them where it is short (where it hides no curve:
+    ``_clear_of_curves``); a few long labels below them, in two columns; many beside
+    them; each label wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line
+    would take the figure's width from the axes)."""
     handles, labels = axes.get_legend_handles_labels()
     if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
-        axes.legend(fontsize="small")
+        axes.legend(fontsize="small").set_gid(_INSIDE)
     elif len(labels) <= _LEGEND_INSIDE:
-        axes.legend(handles, [_wrap(label) for label in labels], fontsize="small",
-                    loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2,
-                    borderaxespad=0.0)
+        _legend_below(axes, handles, [_wrap(label) for label in labels])
     else:
         axes.legend(handles, [_wrap(label) for label in labels],
                     fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
                     borderaxespad=0.0)
+
+
+def _legend_below(axes, handles, labels) -> None:
+    """The legend below the axes: in one row where its labels are short, else in two
+    columns."""
+    ncols = len(labels) if sum(map(len, labels)) <= _LEGEND_ROW else 2
+    axes.legend(handles, labels, fontsize="small", loc="upper center",
+                bbox_to_anchor=(0.5, -0.16), ncols=ncols, borderaxespad=0.0)
+
+
+def _clear_of_curves(figure, axes) -> None:
+    """Move a legend inside ``axes`` that hides a curve of its own below them.
+
+    Inside, the legend stands where it covers the fewest points of the curves
+    (matplotlib's ``"best"``), which where they fill the axes (a driven line's force
+    sensors, oscillating from end to end) is still over one. Where it stands is known
+    once the figure is laid out, as it is here (its title set)."""
+    legend = axes.get_legend()
+    if legend is None or legend.get_gid() != _INSIDE:
+        return
+    figure.draw_without_rendering()
+    box = legend.get_window_extent()
+    handles, labels = axes.get_legend_handles_labels()
+    if any(line.get_transform().transform_path(line.get_path()).intersects_bbox(
+            box, filled=False) for line in handles):
+        legend.remove()
+        _legend_below(axes, handles, labels)
 
 
 def _wrap(label: str) -> str:
@@ -463,6 +494,7 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
          "displacements": _displacements, "energy": _energy, "sensors": _sensors}[view](
             run, figure, axes)
     axes.set_title(_title(run), fontsize="small")
+    _clear_of_curves(figure, axes)
     return figure
 
 
