@@ -143,7 +143,9 @@ def describe_line(line, units: str) -> str:
 
     parts = []
     if line.diameter is not None:
-        names = sorted(set(np.asarray(line.material).tolist()) - {""}) or ["given constants"]
+        # in the line's order (a steel and aluminium dimer starts with steel)
+        names = [m for m in dict.fromkeys(np.asarray(line.material).tolist()) if m] or [
+            "given constants"]
         parts.append(f"{', '.join(n.replace('_', ' ') for n in names)} spheres of "
                      f"{_span(line.diameter, quantity('diameter'))}")
     parts.append(f"masses {_span(line.mass, quantity('mass'))}")

@@ -201,6 +201,18 @@ def _title(run, first: int, last: int) -> str:
     return "\n".join([name] * bool(name) + [describe(run, width=TITLE_WIDTH)])
 
 
+def _magnified(factor: float) -> str:
+    """How much the motion is drawn magnified, in words: ``"magnified 200,000 times"``
+    (a whole number with its thousands marked), ``"true to scale"``, ``"scaled by
+    0.5"``."""
+    if factor == 1.0:
+        return "true to scale"
+    if factor < 1.0:
+        return f"scaled by {factor:g}"
+    whole = factor == math.floor(factor) and factor < 1e15
+    return f"magnified {int(factor):,} times" if whole else f"magnified {factor:g} times"
+
+
 def _clock(times: np.ndarray, units: str) -> list[str]:
     """The text of each frame's time, in one unit for the whole movie and with one
     number of decimals: the fewest that write every time exactly, at most those of 4
@@ -332,8 +344,8 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
         axes.set_xlabel(f"ball (schematic: ball n at n, 1 wide; {one})")
     gaps = np.any(np.asarray(run.line.gap) > 0.0) or any(
         g for _, _, g in shown.walls.values())
-    moved = "displacements from t = 0" if np.any(shown.start) else "displacements"
-    stated = moved + (" and gaps" if gaps else "") + f" × {magnify:g}"
+    moved = "displacements since t = 0" if np.any(shown.start) else "displacements"
+    stated = moved + (" and gaps" if gaps else "") + ", " + _magnified(magnify)
     axes.set_title(stated, loc="right", fontsize="medium").set_gid("magnification")
     time = axes.set_title(clock[-1], loc="left", fontsize="medium")
     time.set_gid("time")

@@ -29,7 +29,7 @@ from matplotlib.ticker import MaxNLocator
 
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
-from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, scale_for
+from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, law_unit, scale_for
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
            "draw_view"]
@@ -66,23 +66,54 @@ def _law(alpha: np.ndarray) -> str:
 _LEGEND_INSIDE = 4
 _LEGEND_LABEL = 24
 _LEGEND_WRAP = 30
+#: a legend below the axes takes a column for each label where they are no longer in
+#: all than this many characters, else two
+_LEGEND_ROW = 40
+#: the gid of a legend inside the axes (``_clear_of_curves`` moves it if it hides one)
+_INSIDE = "legend/inside"
 
 
 def _legend(axes) -> None:
-    """The axes' legend: inside them where it is short; a few long labels below them, in
-    two columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP``
-    characters (a longer line would take the figure's width from the axes)."""
+    """The axes' legend: inside them where it is short (where it hides no curve:
+    ``_clear_of_curves``); a few long labels below them, in two columns; many beside
+    them; each label wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line
+    would take the figure's width from the axes)."""
     handles, labels = axes.get_legend_handles_labels()
     if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
-        axes.legend(fontsize="small")
+        axes.legend(fontsize="small").set_gid(_INSIDE)
     elif len(labels) <= _LEGEND_INSIDE:
-        axes.legend(handles, [_wrap(label) for label in labels], fontsize="small",
-                    loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2,
-                    borderaxespad=0.0)
+        _legend_below(axes, handles, [_wrap(label) for label in labels])
     else:
         axes.legend(handles, [_wrap(label) for label in labels],
                     fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
                     borderaxespad=0.0)
+
+
+def _legend_below(axes, handles, labels) -> None:
+    """The legend below the axes: in one row where its labels are short, else in two
+    columns."""
+    ncols = len(labels) if sum(map(len, labels)) <= _LEGEND_ROW else 2
+    axes.legend(handles, labels, fontsize="small", loc="upper center",
+                bbox_to_anchor=(0.5, -0.16), ncols=ncols, borderaxespad=0.0)
+
+
+def _clear_of_curves(figure, axes) -> None:
+    """Move a legend inside ``axes`` that hides a curve of its own below them.
+
+    Inside, the legend stands where it covers the fewest points of the curves
+    (matplotlib's ``"best"``), which where they fill the axes (a driven line's force
+    sensors, oscillating from end to end) is still over one. Where it stands is known
+    once the figure is laid out, as it is here (its title set)."""
+    legend = axes.get_legend()
+    if legend is None or legend.get_gid() != _INSIDE:
+        return
+    figure.draw_without_rendering()
+    box = legend.get_window_extent()
+    handles, labels = axes.get_legend_handles_labels()
+    if any(line.get_transform().transform_path(line.get_path()).intersects_bbox(
+            box, filled=False) for line in handles):
+        legend.remove()
+        _legend_below(axes, handles, labels)
 
 
 def _wrap(label: str) -> str:
@@ -107,23 +138,76 @@ def _symlog(axes, values) -> None:
     axes.set_ylim(2.0 * bottom if bottom < 0.0 else 0.0, 2.0 * top if top > 0.0 else 0.0)
 
 
-def _drawn(table, quantity: str, units: str) -> str | None:
+def _drawn(table, quantity: str, units: str, unit: str = "") -> str | None:
     """How a key's random values are drawn (``"uniform 1-3 kg"``), from its generator
-    table in the resolved config; None for values that are not drawn at random."""
+    table in the resolved config; None for values that are not drawn at random. A
+    ``quantity`` without a prefixed unit (a stiffness) is written to 4 digits, ``unit``
+    after them."""
     if not isinstance(table, dict) or "random" not in table:
         return None
     def value(x):
         return (format_value(float(x), quantity, units) if quantity != "stiffness"
                 else f"{float(x):.4g}")
+    after = f" {unit}" if unit else ""
     if table["random"] == "uniform":
-        return f"uniform {value(table['low'])}-{value(table['high'])}"
-    return f"lognormal, median {value(table['median'])}, sigma {table['sigma']:g}"
+        return f"uniform {value(table['low'])}-{value(table['high'])}{after}"
+    return f"lognormal, median {value(table['median'])}{after}, sigma {table['sigma']:g}"
+
+
+def _masses(table, mass: np.ndarray, units: str) -> str | None:
+    """The balls' masses in brief, each with its unit: how they are drawn at random, the
+    values of a repeating pattern in the line's order (``30 g / 10 g alternating``), or
+    their range (``10 g-30 g``); None where every ball has one mass."""
+    drawn = _drawn(table, "mass", units)
+    if drawn:
+        return drawn
+    if np.all(mass == mass[0]):
+        return None
+    def value(x):
+        return format_value(float(x), "mass", units)
+    pattern = table.get("pattern") if isinstance(table, dict) and "impurity" not in table \
+        else None
+    if pattern and len(pattern) < mass.size and all(isinstance(x, (int, float))
+                                                    for x in pattern):
+        return " / ".join(map(value, pattern)) + (" alternating" if len(pattern) == 2
+                                                  else " repeating")
+    return f"{value(mass.min())}-{value(mass.max())}"
+
+
+def _driven(subject: str, drive, quantity: str, units: str, swept=()) -> str:
+    """``subject`` (``"left wall driven"``) and what drives it (a ``Drive``, or a tuple of
+    its ``Sine`` terms), in the run's units: each sine's amplitude (a ``quantity``) at
+    its frequency and its ramp (``left wall driven 10 nm at 5.5 kHz (1 ms ramp)``), less
+    the keys ``swept`` (``amplitude``, ``frequency``, ``ramp``: they differ from run to
+    run); samples by their number and their last time."""
+    def value(x, q):
+        return format_value(float(x), q, units)
+    if not isinstance(drive, tuple) and drive.times is not None:
+        return (f"{subject} through {drive.times.size} samples to "
+                f"t = {value(drive.times[-1], 'time')}")
+    si = units == "si"
+    terms = []
+    for sine in drive if isinstance(drive, tuple) else drive.sines:
+        words = []
+        if "amplitude" not in swept:
+            amplitude = value(sine.amplitude, quantity)
+            words.append(amplitude if si else f"amplitude {amplitude}")
+        if "frequency" not in swept:
+            words.append(f"at {'' if si else 'frequency '}{value(sine.frequency, 'frequency')}")
+        if sine.ramp and "ramp" not in swept:
+            ramp = value(sine.ramp, "time")
+            words.append(f"({ramp} ramp)" if si else f"(ramp {ramp})")
+        terms.append(" ".join(words))
+    words = " + ".join(t for t in terms if t)
+    if words and "amplitude" not in swept:  # "a force of 10 mN", "with amplitude 0.1"
+        words = ("with " if not si else "of " if quantity == "force" else "") + words
+    return f"{subject} {words}" if words else subject
 
 
 def describe(run, varying=(), width: int | None = None) -> str:
     """What the line of a run is, in a line: its balls (material, diameter), strikers
-    and speed, contact law, the balls' damping, each wall with its own, and
-    precompression; what the swept keys
+    and speed, contact law, the balls' damping, each wall with its own, precompression,
+    and what drives it (a wall's motion, forces on balls); what the swept keys
     ``varying`` set is left out (it differs from run to run). With ``width``, wrapped
     into lines of about that many characters between its parts."""
     line, units = run.line, run.units
@@ -144,19 +228,20 @@ def describe(run, varying=(), width: int | None = None) -> str:
                      + ("" if "diameter" in varying else f" of {size}"))
     else:
         parts.append("" if "n" in varying else f"N = {line.n}")
-        drawn = _drawn(config.get("mass"), "mass", units)
-        if drawn:
-            parts.append(f"masses {drawn}")
-        elif not np.all(line.mass == line.mass[0]):
-            parts.append(f"masses {line.mass.min():.3g}-{line.mass.max():.3g}")
-    drawn = _drawn(config.get("stiffness"), "stiffness", units)
+        masses = _masses(config.get("mass"), np.asarray(line.mass), units)
+        if masses:
+            parts.append(f"masses {masses}")
+    drawn = _drawn(config.get("stiffness"), "stiffness", units,
+                   law_unit("stiffness", line.alpha, units) if units == "si" else "")
     if drawn:
         parts.append(f"stiffnesses {drawn}")
     moving = line.velocity != 0.0
     k = line.n if moving.all() else int(np.argmin(moving))
     if moving.any():
         speed = format_value(float(np.max(np.abs(line.velocity))), "velocity", units)
-        strikers = "" if "k" in varying else f"K = {k}"
+        # the paper's K on its own line; elsewhere K is as often a contact's stiffness
+        strikers = ("" if "k" in varying or k == 0 else f"K = {k}" if line.is_paper
+                    and units != "si" else f"{k} striker{'s' * (k != 1)}")
         at = "" if units != "si" or "speed" in varying else \
             f"at {speed}" if strikers else f"struck at {speed}"
         parts.append(" ".join(p for p in (strikers, at) if p))
@@ -187,6 +272,20 @@ def describe(run, varying=(), width: int | None = None) -> str:
         parts += [f"wall {side}{how}" for side, how in sides.items()]
     if "precompression" in config and "precompression" not in varying:
         parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
+    # what drives the line: the experiment, as the strikers are a struck line's
+    for side, wall in (("left", line.left), ("right", line.right)):
+        if wall and wall.motion is not None:
+            parts.append(_driven(f"{side} wall driven", wall.motion, "position", units,
+                                 {key.rpartition(".")[2] for key in swept
+                                  if key.startswith(f"walls.{side}.motion.")}))
+    sines = {}  # (the sines on one ball add up: one force of their sum)
+    for ball, drive in line.drives:
+        if drive.times is None:
+            sines.setdefault(ball, []).extend(drive.sines)
+        else:
+            parts.append(_driven(f"ball {ball + 1} driven by a force", drive, "force", units))
+    parts += [_driven(f"ball {ball + 1} driven by a force", tuple(each), "force", units)
+              for ball, each in sines.items()]
     parts = [p for p in parts if p]
     if width is None:
         return ", ".join(parts)
@@ -403,6 +502,7 @@ def draw_view(run, view: str, *, log: bool = False) -> Figure:
          "displacements": _displacements, "energy": _energy, "sensors": _sensors}[view](
             run, figure, axes)
     axes.set_title(_title(run), fontsize="small")
+    _clear_of_curves(figure, axes)
     return figure
 
 

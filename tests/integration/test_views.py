@@ -368,7 +368,7 @@ def test_a_title_gives_each_wall_its_own_restitution(beads):
     assert describe(run, ["walls.right.restitution"]).endswith(
         "restitution 0.8 (Tsuji), wall right")
     assert describe(run, ["chain.restitution"]).endswith(
-        "K = 1 at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
+        "1 striker at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
 
 
 def test_a_wrapped_legend_label_keeps_equations_and_units_whole():
@@ -484,3 +484,43 @@ def test_a_driven_precompressed_line_draws_what_it_took_up(tmp_path):
     assert 1e-14 < work.max() < 1e-11
     assert work.min() > -1e-15 and stored.min() > -1e-15
     assert "static load" in artist(figure, "drive_work").get_label()
+
+
+#: a line shaken above its band (the top at f = 2 sqrt(1.5) / 2 pi = 0.39): the first
+#: ball's force oscillates from end to end of the axes, the last's barely
+SHAKEN = """name = "shaken"
+[chain]
+n = 10
+k = 0
+alpha = 1.5
+precompression = 1.0
+[walls.left]
+motion = {amplitude = 0.001, frequency = 0.6}
+[walls.right]
+[output]
+sensors = [1, 10]
+sensor_dt = 0.05
+[solver]
+t_end = 60.0
+"""
+
+
+def test_a_legend_hides_no_curve(beads, tmp_path):
+    """A driven line's force sensors oscillate from end to end of the axes, where no
+    place inside is free of them: the legend stands below the axes. A struck line's
+    pulses leave it a place inside."""
+    shaken = read_run(simulate_text(tmp_path, SHAKEN) / "run.h5")
+    with style(colour=True):
+        figures = {"shaken": draw_view(shaken, "sensors"), "beads": draw_view(beads, "sensors")}
+    for name, figure in figures.items():
+        figure.draw_without_rendering()
+        axes = figure.axes[0]
+        box = axes.get_legend().get_window_extent()
+        for line in axes.get_lines():
+            path = line.get_transform().transform_path(line.get_path())
+            assert not path.intersects_bbox(box, filled=False), (name, line.get_label())
+    assert figures["shaken"].axes[0].get_legend().get_window_extent().y1 <= \
+        figures["shaken"].axes[0].get_window_extent().y0
+    inside = figures["beads"].axes[0].get_window_extent()
+    box = figures["beads"].axes[0].get_legend().get_window_extent()
+    assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and inside.y0 <= box.y0 <= inside.y1
