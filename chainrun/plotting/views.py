@@ -61,10 +61,13 @@ def _law(alpha: np.ndarray) -> str:
     return "mixed contact laws"
 
 
-#: a legend of more entries than this, or of longer labels, goes beside the axes,
-#: where it hides no curve
+#: a legend of more entries than this, or of longer labels, goes outside the axes,
+#: where it hides no curve: below them up to _LEGEND_BELOW entries where a label is
+#: long (beside them, a column of long labels takes half the figure's width), else
+#: beside them
 _LEGEND_INSIDE = 4
 _LEGEND_LABEL = 24
+_LEGEND_BELOW = 6
 _LEGEND_WRAP = 30
 #: a legend below the axes takes a column for each label where they are no longer in
 #: all than this many characters, else two
@@ -75,13 +78,14 @@ _INSIDE = "legend/inside"
 
 def _legend(axes) -> None:
     """The axes' legend: inside them where it is short (where it hides no curve:
-    ``_clear_of_curves``); a few long labels below them, in two columns; many beside
-    them; each label wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line
+    ``_clear_of_curves``); up to six entries with a long label below them, in two
+    columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line
     would take the figure's width from the axes)."""
     handles, labels = axes.get_legend_handles_labels()
-    if len(labels) <= _LEGEND_INSIDE and max(map(len, labels), default=0) <= _LEGEND_LABEL:
+    long = max(map(len, labels), default=0) > _LEGEND_LABEL
+    if len(labels) <= _LEGEND_INSIDE and not long:
         axes.legend(fontsize="small").set_gid(_INSIDE)
-    elif len(labels) <= _LEGEND_INSIDE:
+    elif len(labels) <= _LEGEND_INSIDE or (long and len(labels) <= _LEGEND_BELOW):
         _legend_below(axes, handles, [_wrap(label) for label in labels])
     else:
         axes.legend(handles, [_wrap(label) for label in labels],

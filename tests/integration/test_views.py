@@ -524,3 +524,22 @@ def test_a_legend_hides_no_curve(beads, tmp_path):
     inside = figures["beads"].axes[0].get_window_extent()
     box = figures["beads"].axes[0].get_legend().get_window_extent()
     assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and inside.y0 <= box.y0 <= inside.y1
+
+
+def test_five_long_legend_entries_go_below_the_axes(tmp_path):
+    # a damped driven line's energy view: kinetic, contacts, dissipated, the drives' work
+    # and the sum, two of them long; beside the axes they took half the figure's width
+    from helpers import driven_sweep
+
+    text = driven_sweep("damped", 6, [0.05], ramp=20.0, t_end=60.0).replace(
+        'alpha = 1.5\n', 'alpha = 1.5\ndamping = 0.05\n', 1).replace(
+        "[solver]", '[output.times]\nstart = 0.0\nstop = 60.0\nstep = 0.5\n[solver]')
+    out = simulate_text(tmp_path, text)
+    run = read_run(next(p for p in out.glob("*.h5") if p.name != "index.h5"))
+    with style(colour=True):
+        figure = draw_view(run, "energy")
+    assert len(figure.axes[0].get_legend().get_texts()) == 5
+    figure.canvas.draw()
+    axes = figure.axes[0].get_window_extent()
+    legend = figure.axes[0].get_legend().get_window_extent()
+    assert legend.y1 <= axes.y0 and axes.width >= 0.75 * figure.bbox.width
