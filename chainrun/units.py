@@ -177,17 +177,34 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
 _SPEC = re.compile(r"(?P<head>[^.]*)\.(?P<digits>\d+)(?P<kind>[efg%])$")
 
 
-def format_with_error(value: float, error: float) -> tuple[str, str]:
-    """``value`` to the place of its ``error``'s second significant digit, and the error
-    to two digits (602.71 and 0.23, 0.8405088363 and 3.7e-09); without a finite error,
-    six digits and ""."""
-    if not (math.isfinite(error) and error > 0.0):
-        return f"{value:.6g}", ""
-    place = math.floor(math.log10(error)) - 1
+def _place(error: float) -> int:
+    """The power of ten of an (finite, positive) ``error``'s second significant digit,
+    once the error is rounded to two digits (0.23 -> -2, 56 -> 0, 0.0996 -> -2)."""
+    return math.floor(math.log10(float(f"{error:.2g}"))) - 1
+
+
+def _at_place(value: float, place: int) -> str:
+    """``value`` rounded to the digit of ``10**place``, in plain notation."""
+    if not math.isfinite(value):
+        return str(value)
     if place < 0:
-        return f"{value:.{-place}f}", f"{error:.2g}"
-    step = 10.0 ** place
-    return f"{round(value / step) * step:.0f}", f"{round(error / step) * step:.0f}"
+        text = f"{value:.{-place}f}"
+    else:
+        step = 10.0 ** place
+        text = f"{round(value / step) * step:.0f}"
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text
+
+
+def format_with_error(value: float, error: float, *others: float) -> tuple[str, ...]:
+    """``value`` to the place of its ``error``'s second significant digit, and the error
+    to two digits, in one notation (602.71 and 0.23, 0.8405088400 and 0.0000000037,
+    55600 and 1700); ``others`` (the ends of a range, say) to that same place after
+    them. Without a finite error > 0, six significant digits and ""."""
+    if not (math.isfinite(error) and error > 0.0):
+        return (f"{value:.6g}", "", *(f"{x:.6g}" for x in others))
+    place = _place(error)
+    return (_at_place(value, place), _at_place(float(f"{error:.2g}"), place),
+            *(_at_place(x, place) for x in others))
 
 
 def supported_format(fmt: str, value: float, spread: float) -> str:

@@ -289,22 +289,40 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     if not ensemble:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
-                  "(min ... max)"]
+                  "(min ... max), to the deviation's second digit"]
     rows = [(label, quantity, np.array([value(s) for s in summaries], dtype=float))
             for label, quantity, value in _ENSEMBLE]
     rows += _ensemble_pulses(pulses) if pulses else []
-    for label, quantity, x in rows:
-        sd = float(np.std(x, ddof=1)) if x.size > 1 else math.nan
-        if quantity is None:
-            unit, (mean, sd, lo, hi) = "", (x.mean(), sd, x.min(), x.max())
-        else:
-            scaled = scale_for(quantity, units, [x.min(), x.max()])
-            unit = f" {scaled.unit}"
-            mean, sd, lo, hi = scaled([x.mean(), sd, x.min(), x.max()])
-        digits = ".2f" if label.endswith("(%)") else ".4g"
-        lines.append(f"  {label:<34} {mean:{digits}} +- {sd:{digits}}{unit} "
-                     f"({lo:{digits}} ... {hi:{digits}})")
+    wide = max(34, *(len(label) for label, _, _ in rows))
+    lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"
+              for label, quantity, x in rows]
     return "\n".join(lines)
+
+
+def _statistics(x: np.ndarray, quantity: str | None, units: str) -> str:
+    """``"88 +- 12 N (75 ... 110)"``: the mean and sample standard deviation of the
+    runs' values ``x`` to the deviation's digits (``format_with_error``), and their
+    range to the same place (counts exactly), in one prefix; the runs without a value
+    (NaN) left out and counted."""
+    from chainrun.units import format_with_error, scale_for
+
+    found = x[np.isfinite(x)]
+    if not found.size:
+        return "none in any run"
+    scaled = scale_for(quantity, units, [found.min(), found.max()]) if quantity else None
+    unit = f" {scaled.unit}" if scaled is not None and scaled.unit else ""
+    y = scaled(found) if scaled is not None else found
+    some = f" (in {found.size} of the {x.size} runs)" if found.size < x.size else ""
+    if found.size < 2 or y.min() == y.max():
+        value = format_with_error(float(y[0]), math.nan)[0]
+        return (f"{value}{unit} in every run" if found.size == x.size
+                else f"{value}{unit}{some}")
+    whole = bool(np.all(found == np.round(found))) and scaled is None
+    mean, sd, lo, hi = format_with_error(float(y.mean()), float(np.std(y, ddof=1)),
+                                         float(y.min()), float(y.max()))
+    if whole:  # a count's range is exact
+        lo, hi = f"{y.min():.0f}", f"{y.max():.0f}"
+    return f"{mean} +- {sd}{unit} ({lo} ... {hi}){some}"
 
 
 def _pulsed(run) -> bool:

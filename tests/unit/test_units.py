@@ -45,6 +45,16 @@ def test_a_value_for_a_person():
 
 def test_a_value_is_shown_to_its_errors_second_digit():
     assert format_with_error(602.706, 0.23) == ("602.71", "0.23")
-    assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "3.7e-09")
     assert format_with_error(1234.5, 56.0) == ("1234", "56")
     assert format_with_error(589.809, float("nan")) == ("589.809", "")
+    # the value and its error in one notation, the error's two digits after rounding
+    assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "0.0000000037")
+    assert format_with_error(55562.5, 1673.0) == ("55600", "1700")
+    assert format_with_error(0.3, 0.0996) == ("0.30", "0.10")
+    assert format_with_error(-0.004, 0.23) == ("0.00", "0.23")  # no "-0.00"
+
+
+def test_a_range_is_shown_to_the_place_of_its_mean():
+    assert format_with_error(88.41, 11.81, 75.13, 109.6) == ("88", "12", "75", "110")
+    assert format_with_error(150.5, 2.851, 144.52, 153.8) == (
+        "150.5", "2.9", "144.5", "153.8")
