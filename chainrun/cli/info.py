@@ -241,7 +241,8 @@ def _holding(s) -> str:
 
 def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
     """The pulse numbers an ensemble averages, each run's (``measure_pulses``): the
-    wave's speed, and the peak force and arrival time at each sensor ball."""
+    wave's speed, and the peak force, width (FWHM) and arrival time at each sensor
+    ball."""
     p0 = pulses[0]
     si = p0.speed_si is not None
     per = "balls/s" if p0.units == "si" else "balls per unit time"
@@ -250,6 +251,8 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
     for i, ball in enumerate(p0.balls):
         rows.append((f"peak force at ball {ball}", "force",
                      np.array([p.peak_force[i] for p in pulses])))
+        rows.append((f"width (FWHM) at ball {ball}", "time",
+                     np.array([p.width[i] for p in pulses])))
         rows.append((f"arrival at ball {ball}", "time",
                      np.array([p.arrival_time[i] for p in pulses])))
     return rows
@@ -400,7 +403,7 @@ def info(paths: tuple[Path, ...]):
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
     deviation and range of each number over the runs when they are an ensemble (the
     same line over random seeds), their pulses' too where they have force sensors (the
-    wave's speed, each sensor's peak force and arrival); the full summary when the
+    wave's speed, each sensor's peak force, width and arrival); the full summary when the
     folder holds a single run.
 
     \b

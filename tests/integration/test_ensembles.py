@@ -207,9 +207,11 @@ def test_info_of_an_ensemble_averages_its_pulses(beads):
     measured = chainrun.pulses(beads)
     rows = {"wave speed": (measured.wave_speed_si.values, 1.0),
             "peak force at ball 10": (measured.peak_force.sel(sensor=10).values, 1.0),
+            "width (FWHM) at ball 10": (measured.width.sel(sensor=10).values, 1e6),
             "arrival at ball 15": (measured.arrival_time.sel(sensor=15).values, 1e6)}
     for label, (values, factor) in rows.items():
         line = next(line for line in out.splitlines() if line.strip().startswith(label))
         assert_mean_and_sd(line, factor * values.mean(), factor * values.std(ddof=1))
     assert "m/s" in next(line for line in out.splitlines() if "wave speed" in line)
     assert "µs" in next(line for line in out.splitlines() if "arrival at ball 15" in line)
+    assert "µs" in next(line for line in out.splitlines() if "width (FWHM) at ball 5" in line)
