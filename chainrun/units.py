@@ -18,8 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "format_supported",
-           "format_value", "format_with_error", "scale_for", "supported_format"]
+__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "end_phrase",
+           "format_supported", "format_value", "format_with_error", "scale_for",
+           "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
 PAPER = "paper units"
@@ -128,6 +129,19 @@ def format_value(value: float, quantity: str, units: str, digits: int = 4,
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
     text = f"{value * scaled.factor:{'#' if zeros else ''}.{digits}g}".rstrip(".")
     return f"{text} {scaled.unit}" if scaled.unit else text
+
+
+def end_phrase(terminal, ends, units: str) -> str:
+    """When the velocities at the end of some runs were taken, for a label: "" where
+    every run reached its terminal state (``terminal``, one flag a run: they are final),
+    else ``"at t = 1.5 ms"`` where the runs all stopped at one time (``ends``), or
+    ``"where each run stopped"``."""
+    if all(bool(t) for t in terminal):
+        return ""
+    times = {float(t) for t in ends}
+    if len(times) == 1:
+        return f"at t = {format_value(times.pop(), 'time', units)}"
+    return "where each run stopped"
 
 
 def _last_place(spread: float) -> int:

@@ -229,6 +229,28 @@ _ENSEMBLE = (
 )
 
 
+def _ensemble_rows(when: str) -> tuple:
+    """``_ENSEMBLE`` for runs that stopped before their terminal state, ``when`` (``"at
+    t = 1.5 ms"``): the balls counted by their velocities there, not by their fate, and
+    the kinetic energy there as one share (as a run's own summary gives it)."""
+    return (
+        *_ENSEMBLE[:2],
+        (f"rebounding {when} (balls)", None, lambda s: s.rebounding),
+        (f"moving forward {when} (balls)", None, lambda s: s.ejected),
+        (f"nearly still {when} (balls)", None, lambda s: s.left_behind),
+        (f"largest forward velocity {when}", "velocity",
+         lambda s: s.forward[1] if s.forward else 0.0),
+        (f"largest backward velocity {when}", "velocity",
+         lambda s: s.backward[1] if s.backward else 0.0),
+        (f"energy kinetic {when} (%)", None,
+         lambda s: 100.0 * (s.energy["rebound"] + s.energy["ejected"]
+                            + s.energy["left behind"])),
+        (f"energy in contacts and walls {when} (%)", None,
+         lambda s: 100.0 * s.energy["contacts"]),
+        (f"energy dissipated {when} (%)", None, lambda s: 100.0 * s.energy["dissipated"]),
+    )
+
+
 def _holding(s) -> str:
     """``"50/60"``: balls that hold to the check's level, of the run's; "-" without a
     check, "failed" for a failed one."""
@@ -262,8 +284,10 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     """An output folder of several runs: a line per run, and for an ``ensemble`` (one
     line over random seeds) the mean and sample standard deviation of each summary
     number over the runs, and of its ``pulses`` (each run's ``measure_pulses``) where
-    the runs have force sensors."""
-    from chainrun.units import scale_for
+    the runs have force sensors. Runs that stopped before their terminal state have
+    their balls counted, and their velocities and energies given, where they stopped,
+    and say so."""
+    from chainrun.units import end_phrase, scale_for
 
     units = summaries[0].units
     time = scale_for("time", units, [s.end_time for s in summaries])
@@ -293,8 +317,14 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
                   "(min ... max), to the deviation's second digit"]
+    when = end_phrase([s.terminal for s in summaries], [s.end_time for s in summaries],
+                      units)
+    if when:
+        lines.append(f"  (the runs stopped before their terminal state: balls are counted "
+                     f"by their velocities {when}, not by their fate; moving forward is "
+                     "faster than 1% of the impact speed)")
     rows = [(label, quantity, np.array([value(s) for s in summaries], dtype=float))
-            for label, quantity, value in _ENSEMBLE]
+            for label, quantity, value in (_ensemble_rows(when) if when else _ENSEMBLE)]
     rows += _ensemble_pulses(pulses) if pulses else []
     wide = max(34, *(len(label) for label, _, _ in rows))
     lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"

@@ -103,6 +103,41 @@ def test_info_and_plot_treat_the_folder_as_an_ensemble(seeds, tmp_path):
     assert (tmp_path / "ensemble.png").is_file() and not (tmp_path / "sweep-final.png").exists()
 
 
+def test_an_ensemble_stopped_at_t_end_says_its_velocities_are_not_final(tmp_path):
+    """Three replicas stopped at t_end = 30, before their terminal state: the info's
+    numbers and the figure's axis are the balls' at t = 30, the counts by velocity."""
+    text = (DISORDER.replace("stop = 60", "stop = 30")
+            .replace("[sweep]\n", "[solver]\nt_end = 30\n[sweep]\n") + "replicas = 3\n")
+    out = simulate_text(tmp_path, text, "stopped")
+    files = [read_run(out / str(row["file"])) for row in read_index(out / "index.h5")]
+    assert not any(f.terminal for f in files)
+    text = CliRunner().invoke(main, ["info", str(out)]).stdout
+    stats = text.split("over the 3 runs")[1]
+    assert "final" not in stats and "rebound (balls)" not in stats
+    assert "ejected" not in stats and "left behind" not in stats
+    rebounding = next(line for line in stats.splitlines() if "rebounding at t = 30 (balls)" in line)
+    counts = [int(np.sum(f.final_velocity < 0)) for f in files]
+    assert_mean_and_sd(rebounding, np.mean(counts), np.std(counts, ddof=1))
+    assert "largest forward velocity at t = 30 " in stats
+    kinetic = next(line for line in stats.splitlines() if "energy kinetic at t = 30 (%)" in line)
+    shares = [100 * 0.5 * np.sum(f.line.mass * f.final_velocity**2) / (0.5 * f.line.mass[0])
+              for f in files]   # the kinetic energy at t = 30, of one striker's m_1 / 2
+    assert_mean_and_sd(kinetic, np.mean(shares), np.std(shares, ddof=1))
+    with style(colour=True):
+        figure = draw_ensemble(ensemble(files), files[0])
+    assert figure.axes[0].get_ylabel() == "velocity at t = 30 (paper units)"
+
+
+def test_an_ensemble_at_its_terminal_state_keeps_final(seeds):
+    files = [read_run(seeds / str(row["file"])) for row in read_index(seeds / "index.h5")]
+    assert all(f.terminal for f in files)
+    with style(colour=True):
+        figure = draw_ensemble(ensemble(files), files[0])
+    assert figure.axes[0].get_ylabel() == "final velocity (paper units)"
+    text = CliRunner().invoke(main, ["info", str(seeds)]).stdout
+    assert "rebound (balls)" in text and "terminal state" not in text
+
+
 def test_replicas_move_every_random_seed_on():
     specs = parse_experiment(DISORDER + "replicas = 3\n", "toml").runs()
     assert [s.run_id for s in specs] == ["replica=0", "replica=1", "replica=2"]

@@ -6,7 +6,14 @@ import math
 
 import pytest
 
-from chainrun.units import PAPER, axis_label, format_value, format_with_error, scale_for
+from chainrun.units import (
+    PAPER,
+    axis_label,
+    end_phrase,
+    format_value,
+    format_with_error,
+    scale_for,
+)
 
 
 @pytest.mark.parametrize("quantity, values, factor, unit", [
@@ -58,3 +65,9 @@ def test_a_range_is_shown_to_the_place_of_its_mean():
     assert format_with_error(88.41, 11.81, 75.13, 109.6) == ("88", "12", "75", "110")
     assert format_with_error(150.5, 2.851, 144.52, 153.8) == (
         "150.5", "2.9", "144.5", "153.8")
+
+
+def test_velocities_where_runs_stopped_say_when():
+    assert end_phrase([True, True], [3.0, 7.0], "paper") == ""   # final: terminal
+    assert end_phrase([False, False], [1.5e-3, 1.5e-3], "si") == "at t = 1.5 ms"
+    assert end_phrase([True, False], [1e-3, 1.5e-3], "si") == "where each run stopped"
