@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "end_phrase",
-           "format_supported", "format_value", "format_with_error", "scale_for",
+           "format_measured", "format_supported", "format_value", "format_with_error", "scale_for",
            "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
@@ -186,6 +186,25 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
     if last <= 0 and 1e-4 <= abs(value) < 1e6:
         return f"{value:.{-last}f}"
     return f"{value:.{lead - last}e}"
+
+
+def format_measured(value: float, error: float, quantity: str, units: str,
+                    digits: int = 5) -> str:
+    """A measured ``value`` for a person (``format_value``: in its prefix, trailing zeros
+    kept) to at most ``digits`` significant digits, and to none that its ``error`` does
+    not support: the last digit kept is the one whose unit is at least the error
+    (``format_supported``). 26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns
+    ``26.001 µs``; without a finite error > 0, ``digits`` digits."""
+    if not (math.isfinite(value) and math.isfinite(error) and error > 0.0):
+        return format_value(value, quantity, units, digits, zeros=True)
+    scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
+    v, e = value * scaled.factor, error * scaled.factor
+    last = _last_place(e)
+    lead = math.floor(math.log10(abs(v))) if v else last
+    if lead - last + 1 >= digits:  # the error cuts none of the digits shown
+        return format_value(value, quantity, units, digits, zeros=True)
+    text = _at_place(v, last) if lead >= last else format_supported(v, e, digits)
+    return f"{text} {scaled.unit}" if scaled.unit else text
 
 
 _SPEC = re.compile(r"(?P<head>[^.]*)\.(?P<digits>\d+)(?P<kind>[efg%])$")

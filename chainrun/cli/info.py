@@ -90,11 +90,19 @@ def _balls(s, threshold: str) -> list[str]:
 def _pulse_lines(p) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
     the wave's speed when two sensors or more saw it."""
-    from chainrun.units import format_value, format_with_error, scale_for
+    from chainrun.units import format_measured, format_value, format_with_error, scale_for
 
     # measured values keep their trailing zeros (31.700 N beside 33.317 N)
     def t(x):
         return format_value(float(x), "time", p.units, 5, zeros=True)
+
+    # a crossing interpolated between samples: to the digits its sampling supports
+    def crossing(x, error):
+        return format_measured(float(x), float(error), "time", p.units)
+
+    width_error = p.width_error if p.width_error is not None else np.full(p.balls.size, np.nan)
+    arrival_error = (p.arrival_error if p.arrival_error is not None
+                     else np.full(p.balls.size, np.nan))
 
     def f(x):
         return format_value(float(x), "force", p.units, 5, zeros=True)
@@ -105,9 +113,10 @@ def _pulse_lines(p) -> list[str]:
             lines.append(f"ball {ball}: no whole pulse recorded")
             continue
         lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])} at "
-                     f"{t(p.peak_time[i])}, width (FWHM) {t(p.width[i])}, arrival "
-                     f"{t(p.arrival_time[i])}; peak of the mean force "
-                     f"{f(p.peak_mean_force[i])}")
+                     f"{t(p.peak_time[i])}, width (FWHM) "
+                     f"{crossing(p.width[i], width_error[i])}, arrival "
+                     f"{crossing(p.arrival_time[i], arrival_error[i])}; peak of the mean "
+                     f"force {f(p.peak_mean_force[i])}")
     fits = [(p.speed_si if p.speed_si is not None else p.speed, "towards ball N"),
             (p.backward_speed_si if p.backward_speed_si is not None else p.backward_speed,
              "towards ball 1")]

@@ -266,6 +266,27 @@ def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     assert per_second * d == pytest.approx(speed, rel=1e-5)
 
 
+def test_a_pulse_width_keeps_the_digits_its_sampling_supports(tmp_path):
+    """The same steel chain's sensor sampled every 0.5 µs and every 0.05 µs: the width
+    printed from the coarser samples is the finer's, to fewer digits."""
+    from helpers import simulate_text
+
+    shown = []
+    for dt in ("5.0e-7", "5.0e-8"):
+        (tmp_path / dt).mkdir()
+        out = simulate_text(tmp_path / dt, 'name = "w"\nunits = "si"\n[chain]\nn = 30\n'
+                            'k = 1\nspeed = 0.5\ndiameter = 0.01\nmaterial = "steel"\n'
+                            f'[output]\nsensors = [20]\nsensor_dt = {dt}\n'
+                            '[solver]\nt_end = 5.0e-4\n')
+        shown.append(re.search(r"width \(FWHM\) ([\d.]+) µs", info(out / "run.h5").stdout)
+                     .group(1))
+    coarse, fine = shown
+    decimals = len(coarse.partition(".")[2])
+    assert decimals < len(fine.partition(".")[2])
+    assert len(coarse.replace(".", "")) < 5   # not the five digits of a measured force
+    assert abs(float(fine) - float(coarse)) <= 10.0 ** -decimals
+
+
 def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
     # The example's 2 kHz run: its drive in the run's units, and each sensor's steady
     # amplitude at the drive's frequency as chainrun.transmission measures it.

@@ -10,6 +10,7 @@ from chainrun.units import (
     PAPER,
     axis_label,
     end_phrase,
+    format_measured,
     format_value,
     format_with_error,
     scale_for,
@@ -71,3 +72,12 @@ def test_velocities_where_runs_stopped_say_when():
     assert end_phrase([True, True], [3.0, 7.0], "paper") == ""   # final: terminal
     assert end_phrase([False, False], [1.5e-3, 1.5e-3], "si") == "at t = 1.5 ms"
     assert end_phrase([True, False], [1e-3, 1.5e-3], "si") == "where each run stopped"
+
+
+def test_a_measured_value_keeps_the_digits_its_error_supports():
+    assert format_measured(26.0007e-6, 3.8e-9, "time", "si") == "26.00 µs"
+    assert format_measured(25.99752e-6, 3.6e-11, "time", "si") == "25.998 µs"  # five at most
+    assert format_measured(26.0e-6, 1e-12, "time", "si") == "26.000 µs"         # zeros kept
+    assert format_measured(150.3968e-6, 5.4e-9, "time", "si") == "150.40 µs"
+    assert format_measured(263e-6, 30e-6, "time", "si") == "300 µs"
+    assert format_measured(60.802e-6, math.nan, "time", "si") == "60.802 µs"
