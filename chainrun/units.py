@@ -188,22 +188,24 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
     return f"{value:.{lead - last}e}"
 
 
-def format_measured(value: float, error: float, quantity: str, units: str,
+def format_measured(value: float, error: float, quantity: str | None, units: str,
                     digits: int = 5) -> str:
-    """A measured ``value`` for a person (``format_value``: in its prefix, trailing zeros
-    kept) to at most ``digits`` significant digits, and to none that its ``error`` does
-    not support: the last digit kept is the one whose unit is at least the error
-    (``format_supported``). 26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns
-    ``26.001 µs``; without a finite error > 0, ``digits`` digits."""
-    if not (math.isfinite(value) and math.isfinite(error) and error > 0.0):
-        return format_value(value, quantity, units, digits, zeros=True)
+    """A measured ``value`` for a person, in its prefix (``scale_for``; ``quantity``
+    None: a pure number), in plain notation with its trailing zeros, to at most
+    ``digits`` significant digits and to none that its ``error`` does not support: the
+    last digit kept is the one whose unit is at least the error (``format_supported``).
+    26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns ``26.001 µs``; 699 µN to one
+    digit ``700 µN``. An error of NaN or 0 cuts no digit; a value below its error's
+    place is shown to one digit, marked ``~``."""
+    if not math.isfinite(value):
+        return str(value)
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
-    v, e = value * scaled.factor, error * scaled.factor
-    last = _last_place(e)
-    lead = math.floor(math.log10(abs(v))) if v else last
-    if lead - last + 1 >= digits:  # the error cuts none of the digits shown
-        return format_value(value, quantity, units, digits, zeros=True)
-    text = _at_place(v, last) if lead >= last else format_supported(v, e, digits)
+    v = value * scaled.factor
+    lead = math.floor(math.log10(abs(v))) if v else 0
+    last = lead - digits + 1
+    if math.isfinite(error) and error > 0.0:
+        last = max(last, _last_place(error * scaled.factor))
+    text = _at_place(v, last) if lead >= last else f"~{v:.0e}"
     return f"{text} {scaled.unit}" if scaled.unit else text
 
 

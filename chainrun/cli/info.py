@@ -399,7 +399,8 @@ def _sensors(run) -> list[str]:
 
 def _steady_lines(tr, units: str) -> list[str]:
     """The steady response at the drive's frequency: a line per sensor, each that is
-    not steady (``chainrun.analysis.transmission.STEADY``) said so."""
+    not steady (``chainrun.analysis.transmission.STEADY``) said so, with no more
+    digits than what the fit leaves allows."""
     from chainrun.analysis.transmission import MIN_PERIODS
     from chainrun.units import format_value
 
@@ -407,10 +408,8 @@ def _steady_lines(tr, units: str) -> list[str]:
             f"last {int(tr.periods)} period{'s' * (int(tr.periods) != 1)} "
             "(chainrun.transmission):")
     lines = [head] + [
-        f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
-        f"{float(ph):.3f} rad, transmission {float(x):.4g}"
-        + ("" if ok else f" (not steady: what the fit leaves is {float(r / a):.0%} of it)"
-           if a > 0 else " (not steady)")
+        f"ball {int(ball)}: " + _response(float(a), float(ph), float(x), float(r), bool(ok),
+                                          units)
         for ball, a, ph, x, r, ok in zip(
             tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
             tr.phase.sel(harmonic=1).values, tr.transmission.sel(harmonic=1).values,
@@ -419,6 +418,32 @@ def _steady_lines(tr, units: str) -> list[str]:
         lines.append(f"(fewer than {MIN_PERIODS} periods: no response is called steady; "
                      "run longer)")
     return [("steady    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
+
+
+def _response(a: float, phase: float, x: float, r: float, steady: bool, units: str) -> str:
+    """One sensor's amplitude ``a``, ``phase`` and transmission ``x`` at the drive's
+    frequency, whose fit left an rms ``r``. A steady one to four digits; one that is
+    not to one digit (its phase to 0.1 rad) while ``r`` is below ``a``, and none where
+    ``r`` is at or above it: it is below the noise, whose level is given instead."""
+    from chainrun.units import format_measured, format_value
+
+    nan = math.nan
+    if steady:
+        return (f"amplitude {format_value(a, 'force', units)}, phase {phase:.3f} rad, "
+                f"transmission {x:.4g}")
+    if not a > 0.0:
+        return "no response at the drive's frequency (not steady)"
+    if r < a:
+        angle = f"{phase:.1f}".replace("-0.0", "0.0")
+        return (f"amplitude {format_measured(a, nan, 'force', units, 1)}, phase "
+                f"{angle} rad, transmission "
+                f"{format_measured(x, nan, None, units, 1)} (not steady: what the fit "
+                f"leaves is {r / a:.0%} of it)")
+    return (f"amplitude and transmission below the noise: what the fit leaves, "
+            f"{format_measured(r, nan, 'force', units, 1)} rms (a transmission of "
+            f"{format_measured(x * r / a, nan, None, units, 1)}), is "
+            f"{format_measured(r / a, nan, None, units, 2)} times the amplitude "
+            "(not steady)")
 
 
 @click.command()

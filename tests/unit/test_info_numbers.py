@@ -1,5 +1,6 @@
-"""The numbers ``chainrun info`` prints for a folder of runs, from given values: an
-ensemble's mean and standard deviation to the deviation's digits."""
+"""The numbers ``chainrun info`` prints, from given values: an ensemble's mean and
+standard deviation to the deviation's digits, a driven sensor's response to the digits
+its fit's residual allows."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 
 import numpy as np
 
-from chainrun.cli.info import _statistics
+from chainrun.cli.info import _response, _statistics
 
 
 def test_a_mean_is_written_to_its_deviations_digits_in_one_prefix():
@@ -41,3 +42,27 @@ def test_runs_without_a_value_are_left_out_and_counted():
     x = np.array([80.0, math.nan, 100.0, 90.0])
     assert _statistics(x, "force", "si") == "90 +- 10 N (80 ... 100) (in 3 of the 4 runs)"
     assert _statistics(np.full(2, math.nan), "force", "si") == "none in any run"
+
+
+def test_a_steady_response_keeps_four_digits():
+    assert _response(0.2321, -0.0134, 1.1923, 0.01, True, "si") == (
+        "amplitude 232.1 mN, phase -0.013 rad, transmission 1.192")
+
+
+def test_a_response_not_steady_gets_one_digit():
+    # what the fit leaves, 53 mN rms, is 23% of the 232.1 mN amplitude
+    assert _response(0.2321, -0.0134, 1.1923, 0.053, False, "si") == (
+        "amplitude 200 mN, phase 0.0 rad, transmission 1 (not steady: what the fit leaves "
+        "is 23% of it)")
+    assert _response(125.6e-6, 3.111, 6.453e-4, 0.5 * 125.6e-6, False, "si").startswith(
+        "amplitude 100 µN, phase 3.1 rad, transmission 0.0006 (not steady")
+
+
+def test_a_response_below_what_the_fit_leaves_is_below_the_noise():
+    # 26.44 µN under a residual 26.43 times it (699 µN rms): the transmission 1.359e-4
+    # is under the residual's 1.359e-4 * 26.43 = 0.0036
+    text = _response(26.44e-6, 1.820, 1.359e-4, 26.43 * 26.44e-6, False, "si")
+    assert text == ("amplitude and transmission below the noise: what the fit leaves, "
+                    "700 µN rms (a transmission of 0.004), is 26 times the amplitude "
+                    "(not steady)")
+    assert "0.0001359" not in text and "1.820" not in text

@@ -81,3 +81,6 @@ def test_a_measured_value_keeps_the_digits_its_error_supports():
     assert format_measured(150.3968e-6, 5.4e-9, "time", "si") == "150.40 µs"
     assert format_measured(263e-6, 30e-6, "time", "si") == "300 µs"
     assert format_measured(60.802e-6, math.nan, "time", "si") == "60.802 µs"
+    # to one digit in plain notation, within its prefix
+    assert format_measured(699e-6, math.nan, "force", "si", 1) == "700 µN"
+    assert format_measured(3.59e-3, math.nan, None, "si", 1) == "0.004"
