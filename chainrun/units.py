@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "end_phrase",
-           "format_measured", "format_supported", "format_value", "format_with_error", "scale_for",
+           "format_digits", "format_measured", "format_supported", "format_value",
+           "format_with_error", "scale_for", "scale_for_column",
            "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
@@ -96,6 +97,16 @@ def scale_for(quantity: str, units: str, values=()) -> Scaled:
                 break
     prefix = dict(_PREFIXES)[size]
     return Scaled(to_base / size, prefix + _BASE[quantity][1])
+
+
+def scale_for_column(quantity: str, units: str, values=()) -> Scaled:
+    """The factor and unit for a column of ``values`` read one by one: the prefix that
+    puts their median magnitude (of those not 0) in [1, 1000), so that values spread
+    over a few decades read without leading zeros (0.116, 0.267 and 1.64 mm/s are 116,
+    267 and 1644 µm/s); as ``scale_for`` otherwise."""
+    a = np.abs(np.asarray(values, dtype=float))
+    a = a[np.isfinite(a) & (a > 0.0)]
+    return scale_for(quantity, units, [float(np.median(a))] if a.size else [])
 
 
 def law_unit(quantity: str, exponents, units: str) -> str:
@@ -188,24 +199,32 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
     return f"{value:.{lead - last}e}"
 
 
+def format_digits(value: float, error: float = math.nan, digits: int = 5) -> str:
+    """``value`` in plain notation with its trailing zeros, to at most ``digits``
+    significant digits and to none that its ``error`` does not support: the last digit
+    kept is the one whose unit is at least the error (``format_supported``). 26.0007
+    with an error of 0.004 is ``26.00``, to one digit 699 is ``700``. An error of NaN
+    or 0 cuts no digit; a value below its error's place is shown to one digit, marked
+    ``~``."""
+    if not math.isfinite(value):
+        return str(value)
+    lead = math.floor(math.log10(abs(value))) if value else 0
+    last = lead - digits + 1
+    if math.isfinite(error) and error > 0.0:
+        last = max(last, _last_place(error))
+    return _at_place(value, last) if lead >= last else f"~{value:.0e}"
+
+
 def format_measured(value: float, error: float, quantity: str | None, units: str,
                     digits: int = 5) -> str:
     """A measured ``value`` for a person, in its prefix (``scale_for``; ``quantity``
-    None: a pure number), in plain notation with its trailing zeros, to at most
-    ``digits`` significant digits and to none that its ``error`` does not support: the
-    last digit kept is the one whose unit is at least the error (``format_supported``).
-    26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns ``26.001 µs``; 699 µN to one
-    digit ``700 µN``. An error of NaN or 0 cuts no digit; a value below its error's
-    place is shown to one digit, marked ``~``."""
+    None: a pure number), to the digits ``format_digits`` keeps of it and its
+    ``error``: 26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns ``26.001 µs``;
+    699 µN to one digit ``700 µN``."""
     if not math.isfinite(value):
         return str(value)
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
-    v = value * scaled.factor
-    lead = math.floor(math.log10(abs(v))) if v else 0
-    last = lead - digits + 1
-    if math.isfinite(error) and error > 0.0:
-        last = max(last, _last_place(error * scaled.factor))
-    text = _at_place(v, last) if lead >= last else f"~{v:.0e}"
+    text = format_digits(value * scaled.factor, error * scaled.factor, digits)
     return f"{text} {scaled.unit}" if scaled.unit else text
 
 

@@ -27,21 +27,27 @@ def _events(counts: dict[str, int]) -> str:
     return count(total, "events") + (f" ({', '.join(parts)})" if parts else "")
 
 
+def _velocity(ball: int, v: float, s, scaled) -> str:
+    """Ball ``ball``'s velocity ``v`` at the end of run ``s``, times ``scaled``'s
+    factor: six significant digits, trailing zeros kept, and none its check's spread
+    does not support (the digits the velocity table shows)."""
+    from chainrun.units import format_digits
+
+    spread = (float(s.check.final_velocity_spread[ball - 1]) if s.check is not None
+              else math.nan)
+    return format_digits(float(scaled(v)), float(scaled(spread)), 6)
+
+
 def _ball(which: str, pick, s) -> str:
-    """A ball's final velocity, with no digit its check's spread does not support (the
-    digits the velocity table shows)."""
-    from chainrun.units import format_supported, format_value, scale_for
+    """A ball's final velocity, to the digits that hold (``_velocity``)."""
+    from chainrun.units import scale_for
 
     if pick is None:
         return f"no ball moves {which}"
     ball, v = pick
-    spread = (float(s.check.final_velocity_spread[ball - 1]) if s.check is not None
-              else math.nan)
-    if not (math.isfinite(spread) and spread > 0.0):
-        return f"ball {ball} at {format_value(v, 'velocity', s.units, 6)}"
     scaled = scale_for("velocity", s.units, [v])
-    text = format_supported(scaled(v), scaled(spread))
-    return f"ball {ball} at {text}" + (f" {scaled.unit}" if scaled.unit else "")
+    return (f"ball {ball} at {_velocity(ball, v, s, scaled)}"
+            + (f" {scaled.unit}" if scaled.unit else ""))
 
 
 def _shares(s) -> str:
@@ -290,18 +296,20 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
 
 
 def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
-    """An output folder of several runs: a line per run, and for an ``ensemble`` (one
+    """An output folder of several runs: a line per run (its largest forward velocity
+    in a prefix that suits the column, to the digits that hold: ``_velocity``), and
+    for an ``ensemble`` (one
     line over random seeds) the mean and sample standard deviation of each summary
     number over the runs, and of its ``pulses`` (each run's ``measure_pulses``) where
     the runs have force sensors. Runs that stopped before their terminal state have
     their balls counted, and their velocities and energies given, where they stopped,
     and say so."""
-    from chainrun.units import end_phrase, scale_for
+    from chainrun.units import end_phrase, scale_for, scale_for_column
 
     units = summaries[0].units
     time = scale_for("time", units, [s.end_time for s in summaries])
-    speed = scale_for("velocity", units, [s.forward[1] if s.forward else 0.0
-                                           for s in summaries])
+    speed = scale_for_column("velocity", units, [s.forward[1] if s.forward else 0.0
+                                                  for s in summaries])
     wide = max(24, *(len(Path(s.path).name) for s in summaries))
     head = (f"{'file':<{wide}} {'N':>7} {'K':>4} {'outcome':<10} "
             f"{'end (' + time.unit + ')':>14} {'events':>8} "
@@ -314,12 +322,12 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
         head += f" {'hold to 1e-9':>13}"
     lines = [f"{path}: {len(summaries)} runs", head]
     for s in summaries:
-        forward = s.forward[1] if s.forward else 0.0
+        forward = _velocity(*s.forward, s, speed) if s.forward else "0"
         outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
         share = s.energy.get("dissipated", math.nan)
         lines.append(f"{Path(s.path).name:<{wide}} {s.n:>7} {s.k:>4} {outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
-                     f"{speed(forward):>16.6g}"
+                     f"{forward:>16}"
                      + (f" {share:>11.2%}" if damped else "")
                      + (f" {_holding(s):>13}" if checked else ""))
     if not ensemble:

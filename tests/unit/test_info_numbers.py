@@ -66,3 +66,38 @@ def test_a_response_below_what_the_fit_leaves_is_below_the_noise():
                     "700 µN rms (a transmission of 0.004), is 26 times the amplitude "
                     "(not steady)")
     assert "0.0001359" not in text and "1.820" not in text
+
+
+def _run(name: str, forward: float, check=None):
+    """What a folder's table reads of a run's summary: a driven run stopped at 6 ms."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(path=f"{name}.h5", units="si", n=30, k=0, outcome="stop_time",
+                           end_time=6e-3, events={}, forward=(3, forward),
+                           energy={"dissipated": 0.0}, check=check, speed=0.0)
+
+
+def test_a_folders_velocities_take_a_prefix_that_suits_the_column():
+    from pathlib import Path
+
+    from chainrun.cli.info import render_folder
+
+    runs = [_run("a", 0.115795e-3), _run("b", 0.267306e-3), _run("c", 1.64444e-3)]
+    lines = render_folder(Path("out"), runs).splitlines()
+    assert "forward (µm/s)" in lines[1]
+    assert [line.split()[-1] for line in lines[2:]] == ["115.795", "267.306", "1644.44"]
+
+
+def test_a_folders_velocities_keep_six_digits_or_those_the_check_supports():
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from chainrun.cli.info import render_folder
+
+    # a check whose spread at ball 3 is 5e-9 m/s (0.005 µm/s): two decimals of µm/s
+    check = SimpleNamespace(ok=True, final_velocity_spread=np.full(30, 5e-9),
+                            holding=lambda speed: 30)
+    runs = [_run("a", 477.95e-6), _run("b", 417.98213e-6, check)]
+    lines = render_folder(Path("out"), runs).splitlines()
+    assert lines[2].split()[-2] == "477.950"       # six digits, the zero one of them
+    assert lines[3].split()[-2] == "417.98"        # the digits the spread leaves

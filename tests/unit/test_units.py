@@ -10,10 +10,12 @@ from chainrun.units import (
     PAPER,
     axis_label,
     end_phrase,
+    format_digits,
     format_measured,
     format_value,
     format_with_error,
     scale_for,
+    scale_for_column,
 )
 
 
@@ -84,3 +86,13 @@ def test_a_measured_value_keeps_the_digits_its_error_supports():
     # to one digit in plain notation, within its prefix
     assert format_measured(699e-6, math.nan, "force", "si", 1) == "700 µN"
     assert format_measured(3.59e-3, math.nan, None, "si", 1) == "0.004"
+
+
+def test_a_columns_prefix_suits_its_typical_value():
+    assert scale_for_column("velocity", "si", [0.116e-3, 0.267e-3, 1.64e-3]).unit == "µm/s"
+    assert scale_for_column("velocity", "si", [0.0, 0.4, 0.5]).unit == "mm/s"
+    assert scale_for_column("velocity", "si", [0.0, 0.0]).unit == "m/s"
+    assert format_digits(477.95, math.nan, 6) == "477.950"
+    assert format_digits(417.98213, 0.005, 6) == "417.98"
+    assert format_digits(417.98213, 0.02, 6) == "418.0"
+    assert format_digits(26.0007, 0.004) == "26.00"
