@@ -18,8 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "format_supported",
-           "format_value", "format_with_error", "scale_for", "supported_format"]
+__all__ = ["PAPER", "SWEPT_QUANTITY", "UNITS", "Scaled", "axis_label", "end_phrase",
+           "format_digits", "format_measured", "format_supported", "format_value",
+           "format_with_error", "scale_for", "scale_for_column",
+           "supported_format"]
 
 #: How the paper's units are named in labels: every coefficient of its equation is 1.
 PAPER = "paper units"
@@ -97,6 +99,16 @@ def scale_for(quantity: str, units: str, values=()) -> Scaled:
     return Scaled(to_base / size, prefix + _BASE[quantity][1])
 
 
+def scale_for_column(quantity: str, units: str, values=()) -> Scaled:
+    """The factor and unit for a column of ``values`` read one by one: the prefix that
+    puts their median magnitude (of those not 0) in [1, 1000), so that values spread
+    over a few decades read without leading zeros (0.116, 0.267 and 1.64 mm/s are 116,
+    267 and 1644 µm/s); as ``scale_for`` otherwise."""
+    a = np.abs(np.asarray(values, dtype=float))
+    a = a[np.isfinite(a) & (a > 0.0)]
+    return scale_for(quantity, units, [float(np.median(a))] if a.size else [])
+
+
 def law_unit(quantity: str, exponents, units: str) -> str:
     """The unit of a force law's coefficient in ``units``: kappa of kappa delta^alpha
     (``"stiffness"``, ``exponents`` the alphas) in N m-alpha, eta of eta delta^beta
@@ -128,6 +140,19 @@ def format_value(value: float, quantity: str, units: str, digits: int = 4,
     scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
     text = f"{value * scaled.factor:{'#' if zeros else ''}.{digits}g}".rstrip(".")
     return f"{text} {scaled.unit}" if scaled.unit else text
+
+
+def end_phrase(terminal, ends, units: str) -> str:
+    """When the velocities at the end of some runs were taken, for a label: "" where
+    every run reached its terminal state (``terminal``, one flag a run: they are final),
+    else ``"at t = 1.5 ms"`` where the runs all stopped at one time (``ends``), or
+    ``"where each run stopped"``."""
+    if all(bool(t) for t in terminal):
+        return ""
+    times = {float(t) for t in ends}
+    if len(times) == 1:
+        return f"at t = {format_value(times.pop(), 'time', units)}"
+    return "where each run stopped"
 
 
 def _last_place(spread: float) -> int:
@@ -174,20 +199,66 @@ def format_supported(value: float, spread: float, digits: int = 6) -> str:
     return f"{value:.{lead - last}e}"
 
 
+def format_digits(value: float, error: float = math.nan, digits: int = 5) -> str:
+    """``value`` in plain notation with its trailing zeros, to at most ``digits``
+    significant digits and to none that its ``error`` does not support: the last digit
+    kept is the one whose unit is at least the error (``format_supported``). 26.0007
+    with an error of 0.004 is ``26.00``, to one digit 699 is ``700``. An error of NaN
+    or 0 cuts no digit; a value below its error's place is shown to one digit, marked
+    ``~``."""
+    if not math.isfinite(value):
+        return str(value)
+    lead = math.floor(math.log10(abs(value))) if value else 0
+    last = lead - digits + 1
+    if math.isfinite(error) and error > 0.0:
+        last = max(last, _last_place(error))
+    return _at_place(value, last) if lead >= last else f"~{value:.0e}"
+
+
+def format_measured(value: float, error: float, quantity: str | None, units: str,
+                    digits: int = 5) -> str:
+    """A measured ``value`` for a person, in its prefix (``scale_for``; ``quantity``
+    None: a pure number), to the digits ``format_digits`` keeps of it and its
+    ``error``: 26.0007 µs measured to 4 ns is ``26.00 µs``, to 0.04 ns ``26.001 µs``;
+    699 µN to one digit ``700 µN``."""
+    if not math.isfinite(value):
+        return str(value)
+    scaled = scale_for(quantity, units, [value]) if units == "si" else Scaled(1.0, "")
+    text = format_digits(value * scaled.factor, error * scaled.factor, digits)
+    return f"{text} {scaled.unit}" if scaled.unit else text
+
+
 _SPEC = re.compile(r"(?P<head>[^.]*)\.(?P<digits>\d+)(?P<kind>[efg%])$")
 
 
-def format_with_error(value: float, error: float) -> tuple[str, str]:
-    """``value`` to the place of its ``error``'s second significant digit, and the error
-    to two digits (602.71 and 0.23, 0.8405088363 and 3.7e-09); without a finite error,
-    six digits and ""."""
-    if not (math.isfinite(error) and error > 0.0):
-        return f"{value:.6g}", ""
-    place = math.floor(math.log10(error)) - 1
+def _place(error: float) -> int:
+    """The power of ten of an (finite, positive) ``error``'s second significant digit,
+    once the error is rounded to two digits (0.23 -> -2, 56 -> 0, 0.0996 -> -2)."""
+    return math.floor(math.log10(float(f"{error:.2g}"))) - 1
+
+
+def _at_place(value: float, place: int) -> str:
+    """``value`` rounded to the digit of ``10**place``, in plain notation."""
+    if not math.isfinite(value):
+        return str(value)
     if place < 0:
-        return f"{value:.{-place}f}", f"{error:.2g}"
-    step = 10.0 ** place
-    return f"{round(value / step) * step:.0f}", f"{round(error / step) * step:.0f}"
+        text = f"{value:.{-place}f}"
+    else:
+        step = 10.0 ** place
+        text = f"{round(value / step) * step:.0f}"
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text
+
+
+def format_with_error(value: float, error: float, *others: float) -> tuple[str, ...]:
+    """``value`` to the place of its ``error``'s second significant digit, and the error
+    to two digits, in one notation (602.71 and 0.23, 0.8405088400 and 0.0000000037,
+    55600 and 1700); ``others`` (the ends of a range, say) to that same place after
+    them. Without a finite error > 0, six significant digits and ""."""
+    if not (math.isfinite(error) and error > 0.0):
+        return (f"{value:.6g}", "", *(f"{x:.6g}" for x in others))
+    place = _place(error)
+    return (_at_place(value, place), _at_place(float(f"{error:.2g}"), place),
+            *(_at_place(x, place) for x in others))
 
 
 def supported_format(fmt: str, value: float, spread: float) -> str:

@@ -33,7 +33,9 @@ class Ensemble:
     run at each snapshot time ``times``, the share of its impact energy still in the
     line (kinetic and contact energy; the rest was dissipated), shape (R, T); None
     when no run dissipated (all of it stays), or the runs' snapshot times differ or
-    are fewer than two.
+    are fewer than two. ``terminal`` says for each run whether it reached its terminal
+    state (else its "final" velocities are those where it stopped), ``end_times`` when
+    it ended, shape (R,) each.
     """
 
     runs: int
@@ -41,6 +43,8 @@ class Ensemble:
     final: dict[str, np.ndarray]
     times: np.ndarray | None
     energy_left: np.ndarray | None
+    terminal: np.ndarray
+    end_times: np.ndarray
 
 
 def ensemble(runs) -> Ensemble:
@@ -56,10 +60,12 @@ def ensemble(runs) -> Ensemble:
     finals = np.array([np.asarray(run.final_velocity) for run in runs])
     final = {"mean": finals.mean(axis=0), "sd": finals.std(axis=0, ddof=1),
              "min": finals.min(axis=0), "max": finals.max(axis=0)}
+    ended = {"terminal": np.array([bool(run.terminal) for run in runs]),
+             "end_times": np.array([float(run.end_time) for run in runs])}
     times = runs[0].times
     if (times.size < 2 or not all(np.array_equal(run.times, times) for run in runs)
             or not any(run.dissipated_energy > 0.0 for run in runs)):
-        return Ensemble(len(runs), runs[0].units, final, None, None)
+        return Ensemble(len(runs), runs[0].units, final, None, None, **ended)
     left = np.array([(run.observables["kinetic_energy"] + run.observables["potential_energy"]
                       - run.baseline_energy) / run.impact_energy for run in runs])
-    return Ensemble(len(runs), runs[0].units, final, times, left)
+    return Ensemble(len(runs), runs[0].units, final, times, left, **ended)

@@ -24,6 +24,13 @@ Definitions (every quantity in the run's own units):
   between the two samples about it;
 - the *arrival time* is the time the rising edge crosses a fraction ``arrival`` (0.1 by
   default) of the way from the baseline to the peak, interpolated likewise;
+- a crossing interpolated linearly between samples ``h`` apart misses the trace by
+  ``f''/2 (t - t_a)(t_b - t)``, at most ``h^2 |f''| / 8``, which along the edge's slope
+  ``f' ~ (f_b - f_a) / h`` is a time of ``h |d2f| / (8 |f_b - f_a|)``: a fraction of the
+  sampling interval set by the trace's second difference ``d2f`` beside the crossing
+  (the larger of the two there). That is each crossing's *error*, the arrival's, and the
+  sum of two the width's; the peak the half level is taken from errs by a higher power
+  of ``h`` (the parabola is exact to second order), which moves the crossings less;
 - a trace whose rise never exceeds ``min_rise`` has no pulse, and a pulse cut off by the
   ends of the samples (its peak at the first or last sample, or a crossing outside them)
   leaves the numbers it cannot give as NaN: a sensor the wave never reaches, or reaches
@@ -83,6 +90,9 @@ class Pulse:
     onset : float
         The time of the pulse's first sample (the first whose rise exceeds ``detect`` of
         the largest): known even for a pulse cut off before its peak; NaN without one.
+    width_error, arrival_error : float
+        What the linear interpolation between samples can miss of the width and the
+        arrival time (the module's docstring): a fraction of the sampling interval.
     """
 
     peak: float
@@ -90,6 +100,8 @@ class Pulse:
     width: float
     arrival_time: float
     onset: float
+    width_error: float = _NAN
+    arrival_error: float = _NAN
 
 
 _NO_PULSE = Pulse(_NAN, _NAN, _NAN, _NAN, _NAN)
@@ -133,6 +145,9 @@ class Pulses:
         through: 0 towards ball 1, 1 away from it.
     peak_force, peak_time, width, arrival_time : ndarray, shape (S,)
         That contact's first pulse (see ``Pulse``).
+    width_error, arrival_error : ndarray, shape (S,)
+        What the sampling leaves uncertain of each width and arrival time (see
+        ``Pulse``); None where not measured.
     peak_mean_force : ndarray, shape (S,)
         The peak of the first pulse of the sensor's mean force (the mean of its two
         contact forces: what a sensor embedded in the ball measures).
@@ -165,6 +180,8 @@ class Pulses:
     arrival: float
     backward_speed: WaveSpeed = WaveSpeed(_NAN, _NAN, 0)
     backward_speed_si: WaveSpeed | None = None
+    width_error: np.ndarray | None = None
+    arrival_error: np.ndarray | None = None
 
 
 def parabola_peak(t, y, i: int) -> tuple[float, float]:
@@ -179,22 +196,29 @@ def parabola_peak(t, y, i: int) -> tuple[float, float]:
     return float(t[i]) + s * h, y1 - 0.25 * (y0 - y2) * s
 
 
-def _crossing(t: np.ndarray, f: np.ndarray, level: float, i: int, back: bool) -> float:
+def _crossing(t: np.ndarray, f: np.ndarray, level: float, i: int,
+              back: bool) -> tuple[float, float]:
     """Where ``f`` first falls to ``level`` going from sample ``i`` backwards (``back``)
-    or forwards, interpolated linearly; NaN if it does not within the samples."""
+    or forwards, interpolated linearly, and what the interpolation can miss of it
+    (the module's docstring); NaN, NaN if it does not fall so within the samples."""
     if back:
         below = np.flatnonzero(f[:i] <= level)
         if not below.size:
-            return _NAN
+            return _NAN, _NAN
         a = int(below[-1])
         b = a + 1
     else:
         below = np.flatnonzero(f[i + 1:] <= level)
         if not below.size:
-            return _NAN
+            return _NAN, _NAN
         b = i + 1 + int(below[0])
         a = b - 1
-    return float(t[a] + (level - f[a]) / (f[b] - f[a]) * (t[b] - t[a]))
+    h, rise = float(t[b] - t[a]), float(f[b] - f[a])
+    # the second differences beside the crossing, where the samples have them
+    bends = [abs(float(f[j - 1] - 2.0 * f[j] + f[j + 1])) for j in (a, b)
+             if 0 < j < f.size - 1]
+    error = h * max(bends) / (8.0 * abs(rise)) if bends else _NAN
+    return float(t[a] + (level - f[a]) / rise * h), error
 
 
 def first_pulse(t, f, baseline: float | None = None, *, arrival: float = 0.1,
@@ -239,9 +263,10 @@ def first_pulse(t, f, baseline: float | None = None, *, arrival: float = 0.1,
         return Pulse(_NAN, _NAN, _NAN, _NAN, onset)
     t_peak, peak = parabola_peak(t, f, i)
     half = base + 0.5 * (peak - base)
-    width = _crossing(t, f, half, i, back=False) - _crossing(t, f, half, i, back=True)
-    return Pulse(peak, t_peak, width,
-                 _crossing(t, f, base + arrival * (peak - base), i, back=True), onset)
+    up, up_error = _crossing(t, f, half, i, back=True)
+    down, down_error = _crossing(t, f, half, i, back=False)
+    came, came_error = _crossing(t, f, base + arrival * (peak - base), i, back=True)
+    return Pulse(peak, t_peak, down - up, came, onset, up_error + down_error, came_error)
 
 
 def wave_speed(positions, times) -> WaveSpeed:
@@ -413,7 +438,9 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
         arrival_time=np.array([p.arrival_time for p in chosen]),
         peak_mean_force=np.array([p.peak for p in mean]),
         speed=speed, speed_si=speed_si, arrival=float(arrival),
-        backward_speed=back, backward_speed_si=back_si)
+        backward_speed=back, backward_speed_si=back_si,
+        width_error=np.array([p.width_error for p in chosen]),
+        arrival_error=np.array([p.arrival_error for p in chosen]))
 
 
 def _leaving_side(pair: list[Pulse]) -> int:

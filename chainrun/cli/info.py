@@ -27,21 +27,27 @@ def _events(counts: dict[str, int]) -> str:
     return count(total, "events") + (f" ({', '.join(parts)})" if parts else "")
 
 
+def _velocity(ball: int, v: float, s, scaled) -> str:
+    """Ball ``ball``'s velocity ``v`` at the end of run ``s``, times ``scaled``'s
+    factor: six significant digits, trailing zeros kept, and none its check's spread
+    does not support (the digits the velocity table shows)."""
+    from chainrun.units import format_digits
+
+    spread = (float(s.check.final_velocity_spread[ball - 1]) if s.check is not None
+              else math.nan)
+    return format_digits(float(scaled(v)), float(scaled(spread)), 6)
+
+
 def _ball(which: str, pick, s) -> str:
-    """A ball's final velocity, with no digit its check's spread does not support (the
-    digits the velocity table shows)."""
-    from chainrun.units import format_supported, format_value, scale_for
+    """A ball's final velocity, to the digits that hold (``_velocity``)."""
+    from chainrun.units import scale_for
 
     if pick is None:
         return f"no ball moves {which}"
     ball, v = pick
-    spread = (float(s.check.final_velocity_spread[ball - 1]) if s.check is not None
-              else math.nan)
-    if not (math.isfinite(spread) and spread > 0.0):
-        return f"ball {ball} at {format_value(v, 'velocity', s.units, 6)}"
     scaled = scale_for("velocity", s.units, [v])
-    text = format_supported(scaled(v), scaled(spread))
-    return f"ball {ball} at {text}" + (f" {scaled.unit}" if scaled.unit else "")
+    return (f"ball {ball} at {_velocity(ball, v, s, scaled)}"
+            + (f" {scaled.unit}" if scaled.unit else ""))
 
 
 def _shares(s) -> str:
@@ -92,11 +98,19 @@ def _balls(s, threshold: str) -> list[str]:
 def _pulse_lines(p) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
     the wave's speed when two sensors or more saw it."""
-    from chainrun.units import format_value, format_with_error, scale_for
+    from chainrun.units import format_measured, format_value, format_with_error, scale_for
 
     # measured values keep their trailing zeros (31.700 N beside 33.317 N)
     def t(x):
         return format_value(float(x), "time", p.units, 5, zeros=True)
+
+    # a crossing interpolated between samples: to the digits its sampling supports
+    def crossing(x, error):
+        return format_measured(float(x), float(error), "time", p.units)
+
+    width_error = p.width_error if p.width_error is not None else np.full(p.balls.size, np.nan)
+    arrival_error = (p.arrival_error if p.arrival_error is not None
+                     else np.full(p.balls.size, np.nan))
 
     def f(x):
         return format_value(float(x), "force", p.units, 5, zeros=True)
@@ -107,9 +121,10 @@ def _pulse_lines(p) -> list[str]:
             lines.append(f"ball {ball}: no whole pulse recorded")
             continue
         lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])} at "
-                     f"{t(p.peak_time[i])}, width (FWHM) {t(p.width[i])}, arrival "
-                     f"{t(p.arrival_time[i])}; peak of the mean force "
-                     f"{f(p.peak_mean_force[i])}")
+                     f"{t(p.peak_time[i])}, width (FWHM) "
+                     f"{crossing(p.width[i], width_error[i])}, arrival "
+                     f"{crossing(p.arrival_time[i], arrival_error[i])}; peak of the mean "
+                     f"force {f(p.peak_mean_force[i])}")
     fits = [(p.speed_si if p.speed_si is not None else p.speed, "towards ball N"),
             (p.backward_speed_si if p.backward_speed_si is not None else p.backward_speed,
              "towards ball 1")]
@@ -231,6 +246,28 @@ _ENSEMBLE = (
 )
 
 
+def _ensemble_rows(when: str) -> tuple:
+    """``_ENSEMBLE`` for runs that stopped before their terminal state, ``when`` (``"at
+    t = 1.5 ms"``): the balls counted by their velocities there, not by their fate, and
+    the kinetic energy there as one share (as a run's own summary gives it)."""
+    return (
+        *_ENSEMBLE[:2],
+        (f"rebounding {when} (balls)", None, lambda s: s.rebounding),
+        (f"moving forward {when} (balls)", None, lambda s: s.ejected),
+        (f"nearly still {when} (balls)", None, lambda s: s.left_behind),
+        (f"largest forward velocity {when}", "velocity",
+         lambda s: s.forward[1] if s.forward else 0.0),
+        (f"largest backward velocity {when}", "velocity",
+         lambda s: s.backward[1] if s.backward else 0.0),
+        (f"energy kinetic {when} (%)", None,
+         lambda s: 100.0 * (s.energy["rebound"] + s.energy["ejected"]
+                            + s.energy["left behind"])),
+        (f"energy in contacts and walls {when} (%)", None,
+         lambda s: 100.0 * s.energy["contacts"]),
+        (f"energy dissipated {when} (%)", None, lambda s: 100.0 * s.energy["dissipated"]),
+    )
+
+
 def _holding(s) -> str:
     """``"50/60"``: balls that hold to the check's level, of the run's; "-" without a
     check, "failed" for a failed one."""
@@ -243,7 +280,8 @@ def _holding(s) -> str:
 
 def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
     """The pulse numbers an ensemble averages, each run's (``measure_pulses``): the
-    wave's speed, and the peak force and arrival time at each sensor ball."""
+    wave's speed, and the peak force, width (FWHM) and arrival time at each sensor
+    ball."""
     p0 = pulses[0]
     si = p0.speed_si is not None
     per = "balls/s" if p0.units == "si" else "balls per unit time"
@@ -252,22 +290,28 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
     for i, ball in enumerate(p0.balls):
         rows.append((f"peak force at ball {ball}", "force",
                      np.array([p.peak_force[i] for p in pulses])))
+        rows.append((f"width (FWHM) at ball {ball}", "time",
+                     np.array([p.width[i] for p in pulses])))
         rows.append((f"arrival at ball {ball}", "time",
                      np.array([p.arrival_time[i] for p in pulses])))
     return rows
 
 
 def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
-    """An output folder of several runs: a line per run, and for an ``ensemble`` (one
+    """An output folder of several runs: a line per run (its largest forward velocity
+    in a prefix that suits the column, to the digits that hold: ``_velocity``), and
+    for an ``ensemble`` (one
     line over random seeds) the mean and sample standard deviation of each summary
     number over the runs, and of its ``pulses`` (each run's ``measure_pulses``) where
-    the runs have force sensors."""
-    from chainrun.units import scale_for
+    the runs have force sensors. Runs that stopped before their terminal state have
+    their balls counted, and their velocities and energies given, where they stopped,
+    and say so."""
+    from chainrun.units import end_phrase, scale_for, scale_for_column
 
     units = summaries[0].units
     time = scale_for("time", units, [s.end_time for s in summaries])
-    speed = scale_for("velocity", units, [s.forward[1] if s.forward else 0.0
-                                           for s in summaries])
+    speed = scale_for_column("velocity", units, [s.forward[1] if s.forward else 0.0
+                                                  for s in summaries])
     wide = max(24, *(len(Path(s.path).name) for s in summaries))
     head = (f"{'file':<{wide}} {'N':>7} {'K':>4} {'outcome':<10} "
             f"{'end (' + time.unit + ')':>14} {'events':>8} "
@@ -280,33 +324,57 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
         head += f" {'hold to 1e-9':>13}"
     lines = [f"{path}: {len(summaries)} runs", head]
     for s in summaries:
-        forward = s.forward[1] if s.forward else 0.0
+        forward = _velocity(*s.forward, s, speed) if s.forward else "0"
         outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
         share = s.energy.get("dissipated", math.nan)
         lines.append(f"{Path(s.path).name:<{wide}} {s.n:>7} {s.k:>4} {outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
-                     f"{speed(forward):>16.6g}"
+                     f"{forward:>16}"
                      + (f" {share:>11.2%}" if damped else "")
                      + (f" {_holding(s):>13}" if checked else ""))
     if not ensemble:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
-                  "(min ... max)"]
+                  "(min ... max), to the deviation's second digit"]
+    when = end_phrase([s.terminal for s in summaries], [s.end_time for s in summaries],
+                      units)
+    if when:
+        lines.append(f"  (the runs stopped before their terminal state: balls are counted "
+                     f"by their velocities {when}, not by their fate; moving forward is "
+                     "faster than 1% of the impact speed)")
     rows = [(label, quantity, np.array([value(s) for s in summaries], dtype=float))
-            for label, quantity, value in _ENSEMBLE]
+            for label, quantity, value in (_ensemble_rows(when) if when else _ENSEMBLE)]
     rows += _ensemble_pulses(pulses) if pulses else []
-    for label, quantity, x in rows:
-        sd = float(np.std(x, ddof=1)) if x.size > 1 else math.nan
-        if quantity is None:
-            unit, (mean, sd, lo, hi) = "", (x.mean(), sd, x.min(), x.max())
-        else:
-            scaled = scale_for(quantity, units, [x.min(), x.max()])
-            unit = f" {scaled.unit}"
-            mean, sd, lo, hi = scaled([x.mean(), sd, x.min(), x.max()])
-        digits = ".2f" if label.endswith("(%)") else ".4g"
-        lines.append(f"  {label:<34} {mean:{digits}} +- {sd:{digits}}{unit} "
-                     f"({lo:{digits}} ... {hi:{digits}})")
+    wide = max(34, *(len(label) for label, _, _ in rows))
+    lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"
+              for label, quantity, x in rows]
     return "\n".join(lines)
+
+
+def _statistics(x: np.ndarray, quantity: str | None, units: str) -> str:
+    """``"88 +- 12 N (75 ... 110)"``: the mean and sample standard deviation of the
+    runs' values ``x`` to the deviation's digits (``format_with_error``), and their
+    range to the same place (counts exactly), in one prefix; the runs without a value
+    (NaN) left out and counted."""
+    from chainrun.units import format_with_error, scale_for
+
+    found = x[np.isfinite(x)]
+    if not found.size:
+        return "none in any run"
+    scaled = scale_for(quantity, units, [found.min(), found.max()]) if quantity else None
+    unit = f" {scaled.unit}" if scaled is not None and scaled.unit else ""
+    y = scaled(found) if scaled is not None else found
+    some = f" (in {found.size} of the {x.size} runs)" if found.size < x.size else ""
+    if found.size < 2 or y.min() == y.max():
+        value = format_with_error(float(y[0]), math.nan)[0]
+        return (f"{value}{unit} in every run" if found.size == x.size
+                else f"{value}{unit}{some}")
+    whole = bool(np.all(found == np.round(found))) and scaled is None
+    mean, sd, lo, hi = format_with_error(float(y.mean()), float(np.std(y, ddof=1)),
+                                         float(y.min()), float(y.max()))
+    if whole:  # a count's range is exact
+        lo, hi = f"{y.min():.0f}", f"{y.max():.0f}"
+    return f"{mean} +- {sd}{unit} ({lo} ... {hi}){some}"
 
 
 def _pulsed(run) -> bool:
@@ -341,7 +409,8 @@ def _sensors(run) -> list[str]:
 
 def _steady_lines(tr, units: str) -> list[str]:
     """The steady response at the drive's frequency: a line per sensor, each that is
-    not steady (``chainrun.analysis.transmission.STEADY``) said so."""
+    not steady (``chainrun.analysis.transmission.STEADY``) said so, with no more
+    digits than what the fit leaves allows."""
     from chainrun.analysis.transmission import MIN_PERIODS
     from chainrun.units import format_value
 
@@ -349,10 +418,8 @@ def _steady_lines(tr, units: str) -> list[str]:
             f"last {int(tr.periods)} period{'s' * (int(tr.periods) != 1)} "
             "(chainrun.transmission):")
     lines = [head] + [
-        f"ball {int(ball)}: amplitude {format_value(float(a), 'force', units)}, phase "
-        f"{float(ph):.3f} rad, transmission {float(x):.4g}"
-        + ("" if ok else f" (not steady: what the fit leaves is {float(r / a):.0%} of it)"
-           if a > 0 else " (not steady)")
+        f"ball {int(ball)}: " + _response(float(a), float(ph), float(x), float(r), bool(ok),
+                                          units)
         for ball, a, ph, x, r, ok in zip(
             tr.sensor.values, tr.amplitude.sel(harmonic=1).values,
             tr.phase.sel(harmonic=1).values, tr.transmission.sel(harmonic=1).values,
@@ -361,6 +428,32 @@ def _steady_lines(tr, units: str) -> list[str]:
         lines.append(f"(fewer than {MIN_PERIODS} periods: no response is called steady; "
                      "run longer)")
     return [("steady    " if i == 0 else "          ") + line for i, line in enumerate(lines)]
+
+
+def _response(a: float, phase: float, x: float, r: float, steady: bool, units: str) -> str:
+    """One sensor's amplitude ``a``, ``phase`` and transmission ``x`` at the drive's
+    frequency, whose fit left an rms ``r``. A steady one to four digits; one that is
+    not to one digit (its phase to 0.1 rad) while ``r`` is below ``a``, and none where
+    ``r`` is at or above it: it is below the noise, whose level is given instead."""
+    from chainrun.units import format_measured, format_value
+
+    nan = math.nan
+    if steady:
+        return (f"amplitude {format_value(a, 'force', units)}, phase {phase:.3f} rad, "
+                f"transmission {x:.4g}")
+    if not a > 0.0:
+        return "no response at the drive's frequency (not steady)"
+    if r < a:
+        angle = f"{phase:.1f}".replace("-0.0", "0.0")
+        return (f"amplitude {format_measured(a, nan, 'force', units, 1)}, phase "
+                f"{angle} rad, transmission "
+                f"{format_measured(x, nan, None, units, 1)} (not steady: what the fit "
+                f"leaves is {r / a:.0%} of it)")
+    return (f"amplitude and transmission below the noise: what the fit leaves, "
+            f"{format_measured(r, nan, 'force', units, 1)} rms (a transmission of "
+            f"{format_measured(x * r / a, nan, None, units, 1)}), is "
+            f"{format_measured(r / a, nan, None, units, 2)} times the amplitude "
+            "(not steady)")
 
 
 @click.command()
@@ -384,7 +477,7 @@ def info(paths: tuple[Path, ...]):
     ensemble of seeds, with its index.h5): one line per run, then the mean, standard
     deviation and range of each number over the runs when they are an ensemble (the
     same line over random seeds), their pulses' too where they have force sensors (the
-    wave's speed, each sensor's peak force and arrival); the full summary when the
+    wave's speed, each sensor's peak force, width and arrival); the full summary when the
     folder holds a single run.
 
     \b

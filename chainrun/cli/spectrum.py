@@ -13,17 +13,21 @@ from chainrun.cli.common import EXIT_BAD_INPUT, fail
 from chainrun.errors import ChainrunError, ConfigError
 
 
-def _range(values, quantity: str, units: str) -> str:
+def _value(x: float, quantity: str, units: str) -> str:
+    """A frequency to four significant digits, trailing zeros kept so that every number
+    shows the same precision (26.40 krad/s beside 45.02 krad/s); 0 exactly as 0."""
     from chainrun.units import format_value
 
-    low, high = (format_value(float(v), quantity, units) for v in (min(values), max(values)))
+    return format_value(0.0 if x == 0.0 else x, quantity, units, zeros=x != 0.0)
+
+
+def _range(values, quantity: str, units: str) -> str:
+    low, high = (_value(float(v), quantity, units) for v in (min(values), max(values)))
     return low if low == high else f"{low} ... {high}"
 
 
 def summary(ds) -> list[str]:
     """A spectrum Dataset in a few lines: the modes, the bands and their gaps."""
-    from chainrun.units import format_value
-
     units = "si" if ds.attrs.get("units") == "SI" else "paper"
     omega, f = ds["omega"].values, ds["frequency"].values
     left_out = int(ds.attrs.get("strikers_left_out", 0))
@@ -47,10 +51,10 @@ def summary(ds) -> list[str]:
         def between(a: float, b: float) -> str:
             """omega from a to b, and f (the drives' frequency) in brackets."""
             turn = 2.0 * np.pi
-            return (f"{format_value(a, 'angular_frequency', units)} ... "
-                    f"{format_value(b, 'angular_frequency', units)} (f "
-                    f"{format_value(a / turn, 'frequency', units)} ... "
-                    f"{format_value(b / turn, 'frequency', units)})")
+            return (f"{_value(a, 'angular_frequency', units)} ... "
+                    f"{_value(b, 'angular_frequency', units)} (f "
+                    f"{_value(a / turn, 'frequency', units)} ... "
+                    f"{_value(b / turn, 'frequency', units)})")
 
         bands = "; ".join(between(float(a), float(b)) for a, b in zip(bottom, top))
         lines.append(f"  periodic, {period} ball{'s' * (period != 1)} per cell; pass "
@@ -59,8 +63,8 @@ def summary(ds) -> list[str]:
                 for b in range(bottom.size - 1) if bottom[b + 1] > top[b]]
         cut = float(top[-1])
         lines.append(f"  band gap{'s' * (len(gaps) != 1)}: {'; '.join(gaps)}" if gaps
-                     else f"  cut-off: {format_value(cut, 'angular_frequency', units)} (f "
-                     f"{format_value(cut / (2.0 * np.pi), 'frequency', units)}; no gap "
+                     else f"  cut-off: {_value(cut, 'angular_frequency', units)} (f "
+                     f"{_value(cut / (2.0 * np.pi), 'frequency', units)}; no gap "
                      "below it)")
     return lines
 

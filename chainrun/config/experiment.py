@@ -229,13 +229,30 @@ def _given_fields(model: BaseModel) -> dict[str, Any]:
     return {key: value for key, value in model if value is not None}
 
 
+def _combination_lines(found: list[tuple[str, str]], runs: int) -> list[str]:
+    """The lines of the problems sweep combinations cause, ``found`` as (the run's
+    label, the problem's line) in order: each once, naming its run, and a problem that
+    every one of the ``runs`` combinations has once for all of them."""
+    labels: dict[str, set[str]] = {}
+    for label, line in found:
+        labels.setdefault(line, set()).add(label)
+    lines: dict[str, None] = {}
+    for label, line in found:
+        if runs > 1 and len(labels[line]) == runs:
+            lines[f"sweep (all {runs} runs): {line}"] = None
+        else:
+            lines[f"sweep ({label}): {line}"] = None
+    return list(lines)
+
+
 def validate(data: Any, source: str, to_run: bool = True) -> Experiment:
     """The experiment in ``data`` (parsed file contents), every problem reported at once.
 
     Each sweep combination is validated on its own, once: the whole file with the first
     combination, then the tables each other one changes; its line is built (and kept for
     its run) unless it is the paper's. Problems a combination causes are named by it,
-    e.g. ``sweep (n=3, k=4): chain.k: must be <= chain.n (3), got 4``.
+    e.g. ``sweep (n=3, k=4): chain.k: must be <= chain.n (3), got 4``; one that every
+    combination has, once for them all: ``sweep (all 3 runs): solver.t_end: required``.
     """
     if not isinstance(data, Mapping):
         got = "an empty file" if data is None else f"{type(data).__name__} {show_value(data)}"
@@ -285,7 +302,7 @@ def validate(data: Any, source: str, to_run: bool = True) -> Experiment:
 
     units = canonical_units(base.get("units", "paper"))
     base_lines: dict[str, None] = {}  # ordered sets of lines
-    combo_lines: dict[str, None] = {}
+    combo_problems: list[tuple[str, str]] = []  # (the run's label, its problem)
     first: Experiment | None = None
     first_models: dict[str, BaseModel] = {}
     first_line = None
@@ -367,7 +384,7 @@ def validate(data: Any, source: str, to_run: bool = True) -> Experiment:
             if touched & (named - set(valid)):
                 continue  # a key whose sweep entry is itself broken: reported there
             if touched & named:
-                combo_lines[f"sweep ({label}): {problem.line()}"] = None
+                combo_problems.append((label, problem.line()))
             else:
                 base_lines[problem.line()] = None
     lines = list(base_lines)
@@ -375,7 +392,7 @@ def validate(data: Any, source: str, to_run: bool = True) -> Experiment:
         (f"sweep.{i.sub[0]}: {i.reason}" if i.sub else f"sweep: {i.reason}") for i in sweep_issues
     ]
     lines += size_lines
-    lines += combo_lines
+    lines += _combination_lines(combo_problems, len(combos))
     if lines:
         raise ConfigError(source, [one_line(line) for line in lines])
     assert first is not None

@@ -29,7 +29,9 @@ from matplotlib.ticker import MaxNLocator
 
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
-from chainrun.units import SWEPT_QUANTITY, axis_label, format_value, law_unit, scale_for
+from chainrun.units import (
+    SWEPT_QUANTITY, axis_label, end_phrase, format_value, law_unit, scale_for,
+)
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
            "draw_view"]
@@ -420,12 +422,9 @@ def _sensors(run, figure: Figure, axes) -> None:
 def _final_name(runs) -> str:
     """What the velocities at the end of ``runs`` are: final velocities at the terminal
     state, else the velocities where the runs stopped (at t_end, or a failure)."""
-    if all(run.terminal for run in runs):
-        return "final velocity"
-    ends = {run.end_time for run in runs}
-    if len(ends) == 1:
-        return f"velocity at t = {format_value(ends.pop(), 'time', runs[0].units)}"
-    return "velocity where each run stopped"
+    when = end_phrase([run.terminal for run in runs], [run.end_time for run in runs],
+                      runs[0].units)
+    return f"velocity {when}" if when else "final velocity"
 
 
 def _final(run, figure: Figure, axes, log: bool) -> None:
@@ -622,14 +621,16 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
 def draw_ensemble(stats, run) -> Figure:
     """An ensemble (``chainrun.analysis.ensemble.Ensemble``; ``run`` one of its runs,
     for the title): the mean final velocity of each ball with its standard deviation
-    and range over the runs, and the energy left in the line over time, each run's and
-    their mean (where the runs share their snapshot times)."""
+    and range over the runs (the velocity where the runs stopped, so labelled, where
+    they stopped before their terminal state), and the energy left in the line over
+    time, each run's and their mean (where the runs share their snapshot times)."""
     final, units = stats.final, stats.units
     two = stats.energy_left is not None
     figure = Figure(figsize=(9.6 if two else 4.8, 3.8), layout="constrained")
     axes = figure.add_subplot(1, 2 if two else 1, 1)
-    label, scaled = axis_label("final velocity", "velocity", units,
-                               np.concatenate([final["min"], final["max"]]))
+    when = end_phrase(stats.terminal, stats.end_times, units)
+    label, scaled = axis_label(f"velocity {when}" if when else "final velocity", "velocity",
+                               units, np.concatenate([final["min"], final["max"]]))
     balls = np.arange(1, final["mean"].size + 1)
     axes.fill_between(balls, scaled(final["min"]), scaled(final["max"]), alpha=0.18,
                       linewidth=0, label="range", gid="final_velocity/range")

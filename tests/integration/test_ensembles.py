@@ -33,6 +33,19 @@ times = {start = 0, stop = 60, step = 3}
 """
 
 
+def assert_mean_and_sd(line: str, mean: float, sd: float) -> None:
+    """``line`` gives ``mean +- sd``: the deviation to two significant digits, the mean
+    to the same decimal place, each within half a unit of that place."""
+    shown_mean, shown_sd = re.search(r"(-?[\d.]+) \+- ([\d.]+)", line).groups()
+    decimals = len(shown_sd.partition(".")[2])
+    assert len(shown_mean.partition(".")[2]) == decimals, line
+    digits = shown_sd.replace(".", "").lstrip("0")
+    assert len(digits if "." in shown_sd else digits.rstrip("0")) <= 2, line
+    half = 0.5 * 10.0 ** -decimals * (1 + 1e-9)
+    assert abs(float(shown_mean) - mean) <= half, line
+    assert abs(float(shown_sd) - sd) <= half, line
+
+
 @pytest.fixture(scope="module")
 def seeds(tmp_path_factory):
     """Eight disordered lines, their masses' seed swept."""
@@ -76,10 +89,8 @@ def test_info_and_plot_treat_the_folder_as_an_ensemble(seeds, tmp_path):
     files = [read_run(seeds / str(row["file"])) for row in read_index(seeds / "index.h5")]
     out = CliRunner().invoke(main, ["info", str(seeds)]).stdout
     rebound = next(line for line in out.splitlines() if "rebound (balls)" in line)
-    mean, sd = (float(x) for x in re.search(r"([\d.]+) \+- ([\d.]+)", rebound).groups())
     counts = [int(np.sum(f.final_velocity < 0)) for f in files]
-    assert mean == pytest.approx(np.mean(counts), rel=1e-3)
-    assert sd == pytest.approx(np.std(counts, ddof=1), rel=1e-3)
+    assert_mean_and_sd(rebound, np.mean(counts), np.std(counts, ddof=1))
     assert is_ensemble(files)
     with style(colour=True):
         figure = draw_ensemble(ensemble(files), files[0])
@@ -90,6 +101,41 @@ def test_info_and_plot_treat_the_folder_as_an_ensemble(seeds, tmp_path):
     result = CliRunner().invoke(main, ["plot", str(seeds), "--what", "final", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "ensemble.png").is_file() and not (tmp_path / "sweep-final.png").exists()
+
+
+def test_an_ensemble_stopped_at_t_end_says_its_velocities_are_not_final(tmp_path):
+    """Three replicas stopped at t_end = 30, before their terminal state: the info's
+    numbers and the figure's axis are the balls' at t = 30, the counts by velocity."""
+    text = (DISORDER.replace("stop = 60", "stop = 30")
+            .replace("[sweep]\n", "[solver]\nt_end = 30\n[sweep]\n") + "replicas = 3\n")
+    out = simulate_text(tmp_path, text, "stopped")
+    files = [read_run(out / str(row["file"])) for row in read_index(out / "index.h5")]
+    assert not any(f.terminal for f in files)
+    text = CliRunner().invoke(main, ["info", str(out)]).stdout
+    stats = text.split("over the 3 runs")[1]
+    assert "final" not in stats and "rebound (balls)" not in stats
+    assert "ejected" not in stats and "left behind" not in stats
+    rebounding = next(line for line in stats.splitlines() if "rebounding at t = 30 (balls)" in line)
+    counts = [int(np.sum(f.final_velocity < 0)) for f in files]
+    assert_mean_and_sd(rebounding, np.mean(counts), np.std(counts, ddof=1))
+    assert "largest forward velocity at t = 30 " in stats
+    kinetic = next(line for line in stats.splitlines() if "energy kinetic at t = 30 (%)" in line)
+    shares = [100 * 0.5 * np.sum(f.line.mass * f.final_velocity**2) / (0.5 * f.line.mass[0])
+              for f in files]   # the kinetic energy at t = 30, of one striker's m_1 / 2
+    assert_mean_and_sd(kinetic, np.mean(shares), np.std(shares, ddof=1))
+    with style(colour=True):
+        figure = draw_ensemble(ensemble(files), files[0])
+    assert figure.axes[0].get_ylabel() == "velocity at t = 30 (paper units)"
+
+
+def test_an_ensemble_at_its_terminal_state_keeps_final(seeds):
+    files = [read_run(seeds / str(row["file"])) for row in read_index(seeds / "index.h5")]
+    assert all(f.terminal for f in files)
+    with style(colour=True):
+        figure = draw_ensemble(ensemble(files), files[0])
+    assert figure.axes[0].get_ylabel() == "final velocity (paper units)"
+    text = CliRunner().invoke(main, ["info", str(seeds)]).stdout
+    assert "rebound (balls)" in text and "terminal state" not in text
 
 
 def test_replicas_move_every_random_seed_on():
@@ -196,11 +242,11 @@ def test_info_of_an_ensemble_averages_its_pulses(beads):
     measured = chainrun.pulses(beads)
     rows = {"wave speed": (measured.wave_speed_si.values, 1.0),
             "peak force at ball 10": (measured.peak_force.sel(sensor=10).values, 1.0),
+            "width (FWHM) at ball 10": (measured.width.sel(sensor=10).values, 1e6),
             "arrival at ball 15": (measured.arrival_time.sel(sensor=15).values, 1e6)}
     for label, (values, factor) in rows.items():
         line = next(line for line in out.splitlines() if line.strip().startswith(label))
-        mean, sd = (float(x) for x in re.search(r"([\d.]+) \+- ([\d.]+)", line).groups())
-        assert mean == pytest.approx(factor * values.mean(), rel=1e-3), line
-        assert sd == pytest.approx(factor * values.std(ddof=1), rel=1e-3), line
+        assert_mean_and_sd(line, factor * values.mean(), factor * values.std(ddof=1))
     assert "m/s" in next(line for line in out.splitlines() if "wave speed" in line)
     assert "µs" in next(line for line in out.splitlines() if "arrival at ball 15" in line)
+    assert "µs" in next(line for line in out.splitlines() if "width (FWHM) at ball 5" in line)

@@ -3,6 +3,7 @@ file's own arrays read with h5py and against conservation of energy."""
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -266,6 +267,27 @@ def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     assert per_second * d == pytest.approx(speed, rel=1e-5)
 
 
+def test_a_pulse_width_keeps_the_digits_its_sampling_supports(tmp_path):
+    """The same steel chain's sensor sampled every 0.5 µs and every 0.05 µs: the width
+    printed from the coarser samples is the finer's, to fewer digits."""
+    from helpers import simulate_text
+
+    shown = []
+    for dt in ("5.0e-7", "5.0e-8"):
+        (tmp_path / dt).mkdir()
+        out = simulate_text(tmp_path / dt, 'name = "w"\nunits = "si"\n[chain]\nn = 30\n'
+                            'k = 1\nspeed = 0.5\ndiameter = 0.01\nmaterial = "steel"\n'
+                            f'[output]\nsensors = [20]\nsensor_dt = {dt}\n'
+                            '[solver]\nt_end = 5.0e-4\n')
+        shown.append(re.search(r"width \(FWHM\) ([\d.]+) µs", info(out / "run.h5").stdout)
+                     .group(1))
+    coarse, fine = shown
+    decimals = len(coarse.partition(".")[2])
+    assert decimals < len(fine.partition(".")[2])
+    assert len(coarse.replace(".", "")) < 5   # not the five digits of a measured force
+    assert abs(float(fine) - float(coarse)) <= 10.0 ** -decimals
+
+
 def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
     # The example's 2 kHz run: its drive in the run's units, and each sensor's steady
     # amplitude at the drive's frequency as chainrun.transmission measures it.
@@ -289,10 +311,17 @@ def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
     for run in (path, chainrun.open_run(path), out):
         with pytest.raises(ChainrunError, match="driven .* chainrun.transmission"):
             chainrun.pulses(run)
+    assert steady.steady.any() and not steady.steady.all()
     for ball in (1, 10, 20):
         a = float(steady.amplitude.sel(sensor=ball, harmonic=1)) * 1e3
         line = next(s for s in text.splitlines() if f"ball {ball}: amplitude" in s)
-        assert re.search(rf"amplitude {a:.4g} mN", line), (line, a)
+        if bool(steady.steady.sel(sensor=ball)):
+            assert re.search(rf"amplitude {a:.4g} mN", line), (line, a)
+        else:  # one digit: what the fit leaves is more than a tenth of the amplitude
+            shown = float(re.search(r"amplitude ([\d.]+) mN", line).group(1))
+            assert len(f"{shown:g}".replace(".", "").strip("0")) == 1, line
+            assert abs(shown - a) <= 0.5 * 10.0 ** math.floor(math.log10(a)), (line, a)
+            assert "(not steady: " in line
 
 
 def test_a_driven_precompressed_line_shares_what_it_took_up_not_the_static_load(tmp_path):

@@ -64,8 +64,8 @@ def test_the_command_writes_the_spectrum_its_figure_and_a_summary(cli, tmp_path)
     text = result.output
     assert text.startswith("run: N = 16 balls at rest, 16 modes: omega ")
     two_pi = 2 * math.pi
-    assert (f"band gap: {math.sqrt(K):.4g} ... {math.sqrt(2 * K):.4g} (f "
-            f"{math.sqrt(K) / two_pi:.4g} ... {math.sqrt(2 * K) / two_pi:.4g})\n") in text
+    assert (f"band gap: {math.sqrt(K):#.4g} ... {math.sqrt(2 * K):#.4g} (f "
+            f"{math.sqrt(K) / two_pi:#.4g} ... {math.sqrt(2 * K) / two_pi:#.4g})\n") in text
     assert "periodic, 2 balls per cell; pass bands (omega): 0 ... " in text
     assert f"-> {Path('results/dimer/spectrum/run.h5')}, run.png, run.pdf" in text
 
@@ -80,6 +80,11 @@ def test_the_example_in_si(cli, tmp_path):
     assert re.search(r"band gap: [\d.]+ krad/s \.\.\. [\d.]+ krad/s \(f [\d.]+ kHz \.\.\. "
                      r"[\d.]+ kHz\)", result.output)
     assert re.search(r"\(f [\d.]+ Hz \.\.\. [\d.]+ kHz\)", result.output)
+    # every frequency but an exact 0 to four significant digits, its zeros kept
+    numbers = re.findall(r"([\d.]+) k?(?:rad/s|Hz)", result.output)
+    assert "0" in numbers and len(numbers) > 10
+    for number in numbers:
+        assert number == "0" or len(number.replace(".", "").lstrip("0")) == 4, number
     np.testing.assert_allclose(ds.static_force, 5.0, rtol=1e-12)  # walls' contacts too
     assert ds.contact.values.tolist() == list(range(21))
 

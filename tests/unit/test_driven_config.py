@@ -85,6 +85,29 @@ def test_a_frequency_sweep(tmp_path):
     assert [s.line.left.motion.sines[0].frequency for s in specs] == [1.0, 3.0]
 
 
+def test_a_problem_every_run_of_a_sweep_has_is_reported_once():
+    """A driven line between walls without t_end, its drive's frequency swept: no run
+    has a terminal state, which is said once for the three."""
+    text = LINE.format(chain="", left="motion = {amplitude = 0.01, frequency = 2.0}",
+                       solver="") + '[sweep]\n"walls.left.motion.frequency" = [1.0, 2.0, 3.0]\n'
+    with pytest.raises(ConfigError) as exc:
+        parse_experiment(text, "toml")
+    assert exc.value.problems == [
+        "sweep (all 3 runs): solver.t_end: required: the line is held between two walls "
+        "and walls.left.motion drives it, so the run has no terminal state"]
+
+
+def test_a_problem_of_some_runs_of_a_sweep_names_each():
+    text = LINE.format(chain="", left="motion = {amplitude = 0.01, frequency = 2.0}",
+                       solver="t_end = 5.0")
+    text += '[sweep]\n"walls.left.motion.frequency" = [1.0, -2.0, -3.0]\n'
+    with pytest.raises(ConfigError) as exc:
+        parse_experiment(text, "toml")
+    assert exc.value.problems == [
+        "sweep (left_motion_frequency=-2.0): walls.left.motion.frequency: must be > 0, got -2.0",
+        "sweep (left_motion_frequency=-3.0): walls.left.motion.frequency: must be > 0, got -3.0"]
+
+
 @pytest.mark.parametrize("keys, expected", [
     (dict(left="motion = {amplitude = 0.01, frequency = 2.0}", solver=""),
      "solver.t_end: required: the line is held between two walls and walls.left.motion "

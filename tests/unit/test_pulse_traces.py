@@ -22,6 +22,7 @@ from chainrun.analysis.pulse import (
 from chainrun.errors import ChainrunError
 from chainrun.solver import Solution
 from chainrun.store import RunData
+from chainrun.units import format_measured, format_value
 
 DT = 0.01
 
@@ -70,6 +71,28 @@ def test_sech2_pulse_and_the_interpolation_converges():
         errors.append((abs(p.width - width), abs(p.arrival_time - arrival)))
     assert errors[1][0] < 2e-4 and errors[1][1] < 2e-4
     assert errors[0][0] / errors[1][0] > 3 and errors[0][1] / errors[1][1] > 3
+
+
+def test_a_widths_printed_digits_hold_as_the_sampling_is_refined():
+    """A sech^2 pulse of 75 N whose FWHM is 26 µs (2 w arccosh(sqrt 2)), sampled every
+    0.5 µs and every 0.05 µs: each crossing's error bound holds the closed form, and
+    the width is printed to the digits it supports, which a ten times finer sampling
+    keeps (five digits at 0.5 µs would print 26.001 µs)."""
+    width, t0 = 26e-6, 123.4567e-6
+    w = 0.5 * width / math.acosh(math.sqrt(2))
+    arrival = t0 - w * math.acosh(math.sqrt(10))
+    shown, five = [], []
+    for dt in (5e-7, 5e-8):
+        t = np.arange(0.0, 300e-6, dt)
+        p = first_pulse(t, sech2(t, t0, w, 75.0))
+        assert abs(p.width - width) <= p.width_error < 0.01 * dt
+        assert abs(p.arrival_time - arrival) <= p.arrival_error < 0.01 * dt
+        shown.append(format_measured(p.width, p.width_error, "time", "si"))
+        five.append(format_value(p.width, "time", "si", 5, zeros=True))
+    assert shown == ["26.00 µs", "26.000 µs"]
+    assert five[0] != five[1]    # the fifth digit at 0.5 µs does not hold
+    # the coarse digits are the fine value's, rounded
+    assert f"{float(shown[1].split()[0]):.2f}" == shown[0].split()[0]
 
 
 def test_the_first_of_two_pulses_is_measured():

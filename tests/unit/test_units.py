@@ -6,7 +6,17 @@ import math
 
 import pytest
 
-from chainrun.units import PAPER, axis_label, format_value, format_with_error, scale_for
+from chainrun.units import (
+    PAPER,
+    axis_label,
+    end_phrase,
+    format_digits,
+    format_measured,
+    format_value,
+    format_with_error,
+    scale_for,
+    scale_for_column,
+)
 
 
 @pytest.mark.parametrize("quantity, values, factor, unit", [
@@ -45,6 +55,44 @@ def test_a_value_for_a_person():
 
 def test_a_value_is_shown_to_its_errors_second_digit():
     assert format_with_error(602.706, 0.23) == ("602.71", "0.23")
-    assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "3.7e-09")
     assert format_with_error(1234.5, 56.0) == ("1234", "56")
     assert format_with_error(589.809, float("nan")) == ("589.809", "")
+    # the value and its error in one notation, the error's two digits after rounding
+    assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "0.0000000037")
+    assert format_with_error(55562.5, 1673.0) == ("55600", "1700")
+    assert format_with_error(0.3, 0.0996) == ("0.30", "0.10")
+    assert format_with_error(-0.004, 0.23) == ("0.00", "0.23")  # no "-0.00"
+
+
+def test_a_range_is_shown_to_the_place_of_its_mean():
+    assert format_with_error(88.41, 11.81, 75.13, 109.6) == ("88", "12", "75", "110")
+    assert format_with_error(150.5, 2.851, 144.52, 153.8) == (
+        "150.5", "2.9", "144.5", "153.8")
+
+
+def test_velocities_where_runs_stopped_say_when():
+    assert end_phrase([True, True], [3.0, 7.0], "paper") == ""   # final: terminal
+    assert end_phrase([False, False], [1.5e-3, 1.5e-3], "si") == "at t = 1.5 ms"
+    assert end_phrase([True, False], [1e-3, 1.5e-3], "si") == "where each run stopped"
+
+
+def test_a_measured_value_keeps_the_digits_its_error_supports():
+    assert format_measured(26.0007e-6, 3.8e-9, "time", "si") == "26.00 µs"
+    assert format_measured(25.99752e-6, 3.6e-11, "time", "si") == "25.998 µs"  # five at most
+    assert format_measured(26.0e-6, 1e-12, "time", "si") == "26.000 µs"         # zeros kept
+    assert format_measured(150.3968e-6, 5.4e-9, "time", "si") == "150.40 µs"
+    assert format_measured(263e-6, 30e-6, "time", "si") == "300 µs"
+    assert format_measured(60.802e-6, math.nan, "time", "si") == "60.802 µs"
+    # to one digit in plain notation, within its prefix
+    assert format_measured(699e-6, math.nan, "force", "si", 1) == "700 µN"
+    assert format_measured(3.59e-3, math.nan, None, "si", 1) == "0.004"
+
+
+def test_a_columns_prefix_suits_its_typical_value():
+    assert scale_for_column("velocity", "si", [0.116e-3, 0.267e-3, 1.64e-3]).unit == "µm/s"
+    assert scale_for_column("velocity", "si", [0.0, 0.4, 0.5]).unit == "mm/s"
+    assert scale_for_column("velocity", "si", [0.0, 0.0]).unit == "m/s"
+    assert format_digits(477.95, math.nan, 6) == "477.950"
+    assert format_digits(417.98213, 0.005, 6) == "417.98"
+    assert format_digits(417.98213, 0.02, 6) == "418.0"
+    assert format_digits(26.0007, 0.004) == "26.00"
