@@ -66,7 +66,9 @@ class RunSummary:
     the run's conditioning check (``chainrun.check.Check``), None for a run without one.
     ``static_load`` is the static load's work taken off the drives' work (0 unless the
     line is driven and starts precompressed); ``reference`` the speed the check's
-    spreads are measured against, and its name (``chainrun.check.reference_speed``).
+    spreads are measured against, and its name (``chainrun.check.reference_speed``);
+    ``energy_floor`` what the rounding of the energy balance's terms can leave
+    (``Diagnostics.energy_floor``).
     ``walls`` is how many walls the line has (0, 1 or 2).
     """
 
@@ -112,6 +114,7 @@ class RunSummary:
     walls: int = 0
     static_load: float = 0.0
     reference: tuple[float, str] = (1.0, "the impact speed")
+    energy_floor: float = 0.0
 
     @property
     def dissipated(self) -> float:
@@ -249,6 +252,7 @@ def summarize(run) -> RunSummary:
         momentum_error=float(d["momentum_error"]),
         energy_error=float(d["energy_error"]),
         energy_correction=float(d["energy_correction"]),
+        energy_floor=float(d.get("energy_floor", 0.0)),
         speed=speed,
         forward=(int(np.argmax(v)) + 1, float(v.max())) if v.size and v.max() > 0 else None,
         backward=(int(np.argmin(v)) + 1, float(v.min())) if v.size and v.min() < 0 else None,

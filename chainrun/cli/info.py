@@ -180,7 +180,7 @@ def render(s, sensors=()) -> str:
     add a section."""
     from chainrun.analysis.summary import law_name
     from chainrun.limits import human_size
-    from chainrun.cli.text import momentum_text
+    from chainrun.cli.text import momentum_text, rounding_text
     from chainrun.units import format_value
 
     def t(x):
@@ -217,7 +217,8 @@ def render(s, sensors=()) -> str:
         *([f"          {s.closed_form} isolated collisions taken whole"]
           if s.closed_form else []),
         f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
-        f"(projection corrected {s.energy_correction:.1e} of E); rtol {s.rtol:g}",
+        f"({rounding_text(s)[2:-1] + '; ' if rounding_text(s) else ''}projection corrected "
+        f"{s.energy_correction:.1e} of E); rtol {s.rtol:g}",
         f"check     {_check(s)}",
         *_balls(s, threshold),
         f"energy    {_shares(s)}",
@@ -398,12 +399,18 @@ def _sensors(run) -> list[str]:
         return _pulse_lines(measure_pulses(run))
     from chainrun.analysis.transmission import HARMONICS, measure
 
-    # the API's fit (its harmonics), or as many harmonics as the sampling resolves
+    # the API's fit (its harmonics), or as many harmonics as the sampling resolves,
+    # said where that is fewer
     for harmonics in range(HARMONICS, 0, -1):
         try:
-            return _steady_lines(measure(run, harmonics=harmonics), run.units)
+            lines = _steady_lines(measure(run, harmonics=harmonics), run.units)
         except ChainrunError:
             continue
+        if harmonics < HARMONICS:
+            lines.append(f"          (fitted with {count(harmonics, 'harmonics')}, not "
+                         f"chainrun.transmission's {HARMONICS}: the sensors sample too "
+                         f"slowly for more; a smaller output.sensor_dt)")
+        return lines
     return []
 
 
@@ -439,8 +446,8 @@ def _response(a: float, phase: float, x: float, r: float, steady: bool, units: s
 
     nan = math.nan
     if steady:
-        return (f"amplitude {format_value(a, 'force', units)}, phase {phase:.3f} rad, "
-                f"transmission {x:.4g}")
+        return (f"amplitude {format_value(a, 'force', units, zeros=True)}, phase "
+                f"{phase:.3f} rad, transmission {x:#.4g}")
     if not a > 0.0:
         return "no response at the drive's frequency (not steady)"
     if r < a:

@@ -20,7 +20,7 @@ def count(n: int, plural: str) -> str:
     return f"{n} {plural}"
 
 
-def _rounding(run) -> str:
+def rounding_text(run) -> str:
     """`` (within its rounding, 2.5e-01)`` after |dE|/E where the rounding of the
     balance's terms can leave more than a millionth (``Diagnostics.energy_floor``: a
     precompressed line shaken by far less than its static compressions)."""
@@ -55,7 +55,7 @@ def run_line(run) -> str:
         how = run.message
     text = (f"{how}, {count(run.events, 'events')}, {count(run.steps, 'steps')}, "
             f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}"
-            + _rounding(run) + ", "
+            + rounding_text(run) + ", "
             + (f"dissipated {run.dissipated:.1%} of the "
                f"{'energy taken up' if run.driven else 'impact energy'}, "
                if run.dissipated else "")

@@ -316,7 +316,7 @@ def test_a_driven_run_reports_its_steady_response_not_pulses(tmp_path):
         a = float(steady.amplitude.sel(sensor=ball, harmonic=1)) * 1e3
         line = next(s for s in text.splitlines() if f"ball {ball}: amplitude" in s)
         if bool(steady.steady.sel(sensor=ball)):
-            assert re.search(rf"amplitude {a:.4g} mN", line), (line, a)
+            assert re.search(rf"amplitude {a:#.4g} mN", line), (line, a)
         else:  # one digit: what the fit leaves is more than a tenth of the amplitude
             shown = float(re.search(r"amplitude ([\d.]+) mN", line).group(1))
             assert len(f"{shown:g}".replace(".", "").strip("0")) == 1, line
@@ -354,3 +354,43 @@ def test_a_driven_precompressed_line_shares_what_it_took_up_not_the_static_load(
     assert all(-1e-2 <= share <= 1.0 + 1e-2 for share in shares), s.energy
     assert sum(shares) == pytest.approx(1.0, abs=1e-2)
     assert "(beyond the static load's -1e-06, which the walls' return gives back)" in info(path).output
+
+
+def test_info_says_a_balance_is_within_its_rounding_as_the_run_line_does(tmp_path):
+    # a wall of amplitude 0: nothing moves, and what |dE|/E measures is the rounding of
+    # the static state's energy (of order 1), as the run's own line says
+    import warnings
+
+    from tests.helpers import driven_sweep
+
+    text = driven_sweep("still", 6, [0.05], t_end=50.0).replace("amplitude = 1.0e-6",
+                                                               "amplitude = 0.0")
+    (tmp_path / "still.toml").write_text(text)
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = CliRunner().invoke(main, ["simulate", str(tmp_path / "still.toml"), "-o",
+                                           str(out)])
+    assert result.exit_code == 0, result.output
+    said = re.search(r"\(within its rounding, ([\d.e+-]+)\)", result.output)
+    assert said, result.output
+    path = next(p for p in out.glob("*.h5") if p.name != "index.h5")
+    assert f"(within its rounding, {said.group(1)}; projection corrected" in info(path).output
+
+
+def test_info_says_when_it_fits_fewer_harmonics_than_transmission(tmp_path):
+    # f = 0.05 sampled every 4: the third harmonic, 0.15, is above the sensors' Nyquist
+    # frequency 1 / (2 * 4) = 0.125, the second is not: info fits two and says so
+    import warnings
+
+    from tests.helpers import driven_sweep
+
+    text = driven_sweep("slow", 6, [0.05], sensor_dt=4.0, ramp=20.0, t_end=400.0)
+    (tmp_path / "slow.toml").write_text(text)
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert CliRunner().invoke(main, ["simulate", str(tmp_path / "slow.toml"), "-o",
+                                         str(out)]).exit_code == 0
+    path = next(p for p in out.glob("*.h5") if p.name != "index.h5")
+    assert "(fitted with 2 harmonics, not chainrun.transmission's 3" in info(path).output
