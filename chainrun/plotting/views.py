@@ -81,8 +81,8 @@ _INSIDE = "legend/inside"
 def _legend(axes) -> None:
     """The axes' legend: inside them where it is short (where it hides no curve:
     ``_clear_of_curves``); up to six entries with a long label below them, in two
-    columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP`` characters (a longer line
-    would take the figure's width from the axes)."""
+    columns; many beside them; each label wrapped to lines of ``_LEGEND_WRAP``
+    characters (a longer line would take the figure's width from the axes)."""
     handles, labels = axes.get_legend_handles_labels()
     long = max(map(len, labels), default=0) > _LEGEND_LABEL
     if len(labels) <= _LEGEND_INSIDE and not long:

@@ -353,7 +353,8 @@ def test_a_driven_precompressed_line_shares_what_it_took_up_not_the_static_load(
     shares = [s.energy[name] for name in ("rebound", "ejected", "left behind", "contacts")]
     assert all(-1e-2 <= share <= 1.0 + 1e-2 for share in shares), s.energy
     assert sum(shares) == pytest.approx(1.0, abs=1e-2)
-    assert "(beyond the static load's -1e-06, which the walls' return gives back)" in info(path).output
+    said = info(path).output
+    assert "(beyond the static load's -1e-06, which the walls' return gives back)" in said
 
 
 def test_info_says_a_balance_is_within_its_rounding_as_the_run_line_does(tmp_path):
