@@ -73,7 +73,7 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     if isinstance(run, xr.DataTree):       # simulate's sweep: a child per run
         names = list(run.children)
         return _pulses_along_run([_run_pulses(run[name].to_dataset(), name)
-                                  for name in names], xr.Dataset(coords={"run": names}))
+                                  for name in names], open_sweep(run))
     if isinstance(run, xr.Dataset):
         if "run" not in run.dims:
             return _run_pulses(run)

@@ -288,7 +288,8 @@ _EVENT_FILL = {"event_contact": -1, "event_kind": 0}
 
 
 def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
-    """Every run of the output folder ``folder`` (its ``index.h5``) as one Dataset.
+    """Every run of the output folder ``folder`` (its ``index.h5``) as one Dataset; or
+    of a sweep ``chainrun.simulate`` returned (its DataTree), the same.
 
     The runs' Datasets (``open_run``) are put side by side along a new dimension
     ``run``, whose coordinate is the run ids; the swept keys are coordinates along it
@@ -308,14 +309,23 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     Raises
     ------
     chainrun.errors.StoreError
-        For a folder without an index file, or a run file that cannot be read.
+        For a folder without an index file, a run file that cannot be read, or
+        something neither a folder's path nor a sweep's DataTree.
     """
-    import numpy as np
     import xarray as xr
 
     from chainrun.errors import StoreError
     from chainrun.store import read_index
 
+    if isinstance(folder, xr.DataTree):     # simulate's sweep: a child per run
+        if not folder.children:
+            raise StoreError("open_sweep: the DataTree holds no runs")
+        return _along_run([child.to_dataset() for child in folder.children.values()],
+                          list(folder.children))
+    if not isinstance(folder, (str, os.PathLike)):
+        raise StoreError(f"open_sweep: expected an output folder's path or the DataTree "
+                         f"chainrun.simulate returns for a sweep, got "
+                         f"{type(folder).__name__}")
     folder = Path(folder)
     index = index_file(folder)
     if not index.is_file():
@@ -323,7 +333,16 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     rows = read_index(index)
     if not rows:
         raise StoreError(f"{folder}: the index lists no runs")
-    runs = [open_run(folder / str(row["file"])) for row in rows]
+    return _along_run([open_run(folder / str(row["file"])) for row in rows],
+                      [str(row["run_id"]) for row in rows])
+
+
+def _along_run(runs: list, ids: list[str]) -> "xarray.Dataset":  # noqa: F821
+    """The runs' Datasets (``open_run``) side by side along ``run``, named by ``ids``,
+    with the swept keys as coordinates (``open_sweep``)."""
+    import numpy as np
+    import xarray as xr
+
     keys = list(dict.fromkeys(key for ds in runs for key in json.loads(ds.attrs["overrides"])))
     swept = {key: ("run", [json.loads(ds.attrs["overrides"]).get(key, np.nan) for ds in runs])
              for key in keys}
@@ -339,7 +358,7 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     for key in per_run:
         out.attrs.pop(key, None)
     out.attrs.pop("overrides", None)
-    out = out.assign_coords(run=[str(row["run_id"]) for row in rows], **swept)
+    out = out.assign_coords(run=list(ids), **swept)
     units = out.attrs.get("units")
     for key in keys:
         quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])

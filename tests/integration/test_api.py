@@ -83,6 +83,39 @@ def test_a_sweep_is_a_tree_of_runs():
         assert ds.final_velocity.sum().item() == pytest.approx(k, abs=1e-12)
 
 
+SPEEDS = """name = "speeds"
+[chain]
+n = 12
+k = 1
+alpha = 1.5
+[output]
+times = {start = 0, stop = 20, step = 1}
+sensors = [4, 8]
+sensor_dt = 0.05
+[solver]
+t_end = 20.0
+[sweep]
+"chain.speed" = [0.5, 2.0]
+"""
+
+
+def test_a_sweep_from_python_is_read_along_run_as_the_commands_folder(tmp_path):
+    import tomllib
+
+    folder = simulate_text(tmp_path, SPEEDS, "speeds")
+    tree = chainrun.simulate(tomllib.loads(SPEEDS))
+    along = chainrun.open_sweep(tree)
+    _same(along.drop_vars("diagnostics_wall_time"),
+          chainrun.open_sweep(folder).drop_vars("diagnostics_wall_time"))
+    assert list(along["run"].values) == ["speed=0.5", "speed=2.0"]
+    assert list(along["chain.speed"].values) == [0.5, 2.0]
+    # every ball starts at rest but the striker, at the swept speed
+    np.testing.assert_array_equal(along.initial_velocity.sel(ball=1), [0.5, 2.0])
+    p = chainrun.pulses(tree)
+    assert list(p["chain.speed"].values) == [0.5, 2.0]
+    assert p.peak_force.dims == ("run", "sensor")
+
+
 def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
     with pytest.raises(ConfigError, match=r"chain\.n"):
         chainrun.simulate(chain={"n": 0, "k": 1})
