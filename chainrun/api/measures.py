@@ -154,11 +154,16 @@ def _as_dataset(p):
                             "peak of the first pulse of the mean of the two contact "
                             "forces: what a sensor embedded in the ball measures"),
     }
-    data = {name: ("sensor", values, {"units": unit(q), "long_name": text})
+    # the short long_name is the axis label xarray's plots take; the text, description
+    labels = {"peak_force": "peak force", "peak_time": "peak time", "width": "pulse width",
+              "arrival_time": "arrival time", "peak_mean_force": "peak sensor force"}
+    data = {name: ("sensor", values, {"units": unit(q), "long_name": labels[name],
+                                      "description": text})
             for name, (values, q, text) in per_sensor.items()}
-    data["side"] = ("sensor", p.side, {"long_name": "the contact measured (a number, "
-                                                    "not a quantity): 0 towards ball 1, "
-                                                    "1 away from it"})
+    data["side"] = ("sensor", p.side, {"long_name": "side",
+                                       "description": "the contact measured (a number, "
+                                                      "not a quantity): 0 towards ball 1, "
+                                                      "1 away from it"})
     per_time = "ball/s" if si else "balls per unit time (paper units)"
     two = p.backward_speed.points > 0
     way = " towards ball N" if two else ""
@@ -173,13 +178,16 @@ def _as_dataset(p):
                            "metres per second", " towards ball 1"))
     for name, speed, units, what, way in speeds:
         data[name] = ((), speed.value, {
-            "units": units, "long_name": f"wave speed{way} in {what}: least-squares slope "
-                                         f"of the measured contacts' positions against "
-                                         f"their peak times ({speed.points} sensors)"})
+            "units": units, "long_name": f"wave speed{way}",
+            "description": f"wave speed{way} in {what}: least-squares slope of the "
+                           f"measured contacts' positions against their peak times "
+                           f"({speed.points} sensors)"})
         data[f"{name}_error"] = ((), speed.error, {
-            "units": units, "long_name": "standard uncertainty of the wave speed, from the "
-                                         "fit's residuals (NaN with two sensors)"})
-    return xr.Dataset(data, coords={"sensor": ("sensor", p.balls)},
+            "units": units, "long_name": f"wave speed{way} uncertainty",
+            "description": "standard uncertainty of the wave speed, from the fit's "
+                           "residuals (NaN with two sensors)"})
+    sensor = {"long_name": "sensor ball", "description": "the ball that carries the sensor"}
+    return xr.Dataset(data, coords={"sensor": ("sensor", p.balls, sensor)},
                       attrs={"units": "SI" if si else _UNITS, "arrival_fraction": p.arrival})
 
 

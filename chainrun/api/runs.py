@@ -96,6 +96,51 @@ _OBSERVABLES = {
                    "kinetic + potential + dissipated = initial + drive_work", "energy"),
 }
 
+#: The short ``long_name`` of each variable, which xarray's plots take for their axis
+#: labels; the longer text of the tables above (what it is, how it is measured, what
+#: NaN means) is its ``description``.
+_LABELS = {
+    "position": "displacement", "mass": "mass", "initial_velocity": "initial velocity",
+    "initial_position": "initial displacement", "force": "external force",
+    "final_position": "final displacement", "final_velocity": "final velocity",
+    "separation_time": "separation time", "separation_velocity": "separation velocity",
+    "stiffness": "contact stiffness", "alpha": "force-law exponent", "gap": "gap",
+    "damping": "damping coefficient", "damping_exponent": "damping exponent",
+    "contact_dissipation": "dissipated energy", "wall_stiffness": "wall stiffness",
+    "wall_alpha": "wall force-law exponent", "wall_gap": "wall gap",
+    "wall_damping": "wall damping coefficient",
+    "wall_damping_exponent": "wall damping exponent", "wall_impulse": "wall impulse",
+    "wall_dissipation": "wall dissipated energy",
+    "wall_motion_amplitude": "wall motion amplitude",
+    "wall_motion_frequency": "wall motion frequency", "wall_motion_ramp": "wall motion ramp",
+    "event_time": "event time", "event_contact": "event contact", "event_kind": "event kind",
+    "kinetic_energy": "kinetic energy", "potential_energy": "potential energy",
+    "momentum": "momentum", "dissipated_energy": "dissipated energy",
+    "drive_work": "drive work", "diameter": "diameter", "material": "material",
+    "final_velocity_spread": "final velocity spread",
+    "separation_velocity_spread": "separation velocity spread",
+    "sensor_force": "contact force", "sensor_mean_force": "sensor force",
+}
+#: The coordinates' labels and, where the name alone does not say it, descriptions.
+_COORD_LABELS = {
+    "time": ("time", "time of the snapshot"), "ball": ("ball", "ball number (from 1)"),
+    "contact": ("contact", "contact j joins balls j and j+1"),
+    "wall": ("wall", "left: before ball 1, right: after ball N"),
+    "event": ("event", "number of the contact event in the log"),
+    "sine": ("sine", "number of the sine in the wall's motion"),
+    "sample": ("sample time", "time of the force sensors' sample"),
+    "sensor": ("sensor ball", "the ball that carries the force sensor"),
+    "side": ("side", "the sensor ball's contact"),
+}
+
+
+def _labelled(name: str, meta: dict) -> dict:
+    """``meta`` with the variable's short ``long_name``; its text as ``description``."""
+    label = _LABELS.get(name)
+    if label is None or meta.get("long_name") == label:
+        return meta
+    return {**meta, "long_name": label, "description": meta["long_name"]}
+
 
 def _unit(quantity: str | None, units: str) -> str | None:
     """The ``units`` attribute of a quantity: SI's, or the paper's units."""
@@ -181,16 +226,18 @@ def _variables(run) -> tuple[dict, dict]:
     out = {}
     for name, (dims, array, meta, quantity) in data.items():
         unit = _unit(quantity, units)
-        out[name] = (dims, array, meta | ({"units": unit} if unit else {}))
+        out[name] = (dims, array, _labelled(name, meta) | ({"units": unit} if unit else {}))
     for name, exponents in (("stiffness", line.alpha), ("damping", line.damping_exponent),
                             ("wall_stiffness", values["wall_alpha"]),
                             ("wall_damping", values["wall_damping_exponent"])):
         if name in out and "units" in out[name][2]:
             quantity = "damping" if name.endswith("damping") else "stiffness"
             out[name][2]["units"] = law_unit(quantity, exponents, units)
-    for name, unit in (("time", "time"), ("sample", "time")):
-        if name in coords:
-            coords[name] = (coords[name][0], coords[name][1], {"units": _unit(unit, units)})
+    for name, (dim, values) in coords.items():
+        label, text = _COORD_LABELS[name]
+        unit = _unit("time", units) if name in ("time", "sample") else None
+        coords[name] = (dim, values, {"long_name": label, "description": text,
+                                      **({"units": unit} if unit else {})})
     return out, coords
 
 
@@ -222,7 +269,9 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     (the contact's number, 0 and N for the walls) and ``event_kind`` (event); with
     sensors, ``sensor_force`` (sample, sensor, side) and ``sensor_mean_force``.
     Every quantity has its ``units``: SI (s, m, m/s, kg, N, J, ...) for a run in SI,
-    else the paper's. Attributes: the run's parameters (``n``, ``k``, ``alpha``,
+    else the paper's; every variable and coordinate a short ``long_name``, the label
+    xarray's plots give an axis, and where the name does not say it all a
+    ``description``. Attributes: the run's parameters (``n``, ``k``, ``alpha``,
     ``rtol``, ``t_end``, ...), its outcome (``outcome``, ``terminal``, ``end_time``,
     ``message``, ``final_drive_work``: the drives' work by ``end_time``), its
     diagnostics (``diagnostics_*``), the line's scales (``scales_*``), the config text
@@ -282,6 +331,17 @@ _PER_RUN_ATTRS = {
     "diagnostics_velocity_floor": ("velocity floor of the contact rules, in the line's "
                                    "velocity scale", None),
     "diagnostics_closed_form_collisions": ("isolated binary collisions taken whole", None),
+    "diagnostics_energy_floor": ("what rounding alone can leave in the energy balance, "
+                                 "relative to the impact energy", None),
+}
+#: The short labels of those whose text is longer (the text is their description).
+_PER_RUN_LABELS = {
+    "config_hash": "config hash", "diagnostics_momentum_error": "momentum error",
+    "diagnostics_energy_error": "energy error",
+    "diagnostics_energy_correction": "energy correction",
+    "diagnostics_energy_floor": "energy rounding floor",
+    "diagnostics_velocity_floor": "velocity floor",
+    "diagnostics_closed_form_collisions": "closed-form collisions",
 }
 #: Values that fill a run's shorter event log (its events are numbered 0..E-1).
 _EVENT_FILL = {"event_contact": -1, "event_kind": 0}
@@ -358,19 +418,26 @@ def _along_run(runs: list, ids: list[str]) -> "xarray.Dataset":  # noqa: F821
     for key in per_run:
         out.attrs.pop(key, None)
     out.attrs.pop("overrides", None)
-    out = out.assign_coords(run=list(ids), **swept)
+    out = out.assign_coords(run=("run", list(ids), {"long_name": "run",
+                                                    "description": "the run's id"}),
+                            **swept)
     units = out.attrs.get("units")
     for key in keys:
         quantity = SWEPT_QUANTITY.get(key.rpartition(".")[2])
         unit = _unit(quantity, "si" if units == "SI" else "paper")
-        out[key].attrs = {"long_name": f"the swept key {key}", **({"units": unit} if unit
-                                                                   else {})}
+        last = key.rpartition(".")[2]
+        label = _LABELS.get(last, last.replace("_", " "))
+        out[key].attrs = {"long_name": label if label == key else f"{label} ({key})",
+                          "description": f"the swept key {key}",
+                          **({"units": unit} if unit else {})}
     for key in per_run:
         if key in _PER_RUN_ATTRS and key in out.data_vars and not out[key].attrs:
             text, quantity = _PER_RUN_ATTRS[key]
             unit = "s" if quantity == "wall" else _unit(quantity, "si" if units == "SI"
                                                         else "paper")
-            out[key].attrs = {"long_name": text, **({"units": unit} if unit else {})}
+            label = _PER_RUN_LABELS.get(key)
+            meta = {"long_name": label, "description": text} if label else {"long_name": text}
+            out[key].attrs = meta | ({"units": unit} if unit else {})
     return out.assign(event_count=("run", np.array(counts),
                                    {"long_name": "events in each run's log"}))
 

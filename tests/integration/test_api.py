@@ -116,6 +116,24 @@ def test_a_sweep_from_python_is_read_along_run_as_the_commands_folder(tmp_path):
     assert p.peak_force.dims == ("run", "sensor")
 
 
+def test_every_variable_has_a_short_label_for_plots_and_its_description():
+    # xarray's plots label an axis "long_name [units]": a label, not a definition
+    tree = chainrun.simulate(chain={"n": 12, "k": 1, "alpha": 1.5},
+                             output={"times": {"start": 0, "stop": 20, "step": 1},
+                                     "sensors": [4, 8], "sensor_dt": 0.05},
+                             solver={"t_end": 20.0}, sweep={"chain.speed": [0.5, 2.0]})
+    for ds in (chainrun.open_sweep(tree), chainrun.pulses(tree)):
+        for name, var in ds.variables.items():
+            label = var.attrs.get("long_name", "")
+            assert label and len(label) <= 40 and ":" not in label, (name, label)
+    ds = tree["speed=0.5"].to_dataset()
+    assert ds.drive_work.attrs["long_name"] == "drive work"
+    assert "kinetic + potential + dissipated" in ds.drive_work.attrs["description"]
+    assert "NaN" in ds.separation_time.attrs["description"]
+    assert ds["sample"].attrs["long_name"] == "sample time"
+    assert chainrun.open_sweep(tree)["chain.speed"].attrs["long_name"] == "speed (chain.speed)"
+
+
 def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
     with pytest.raises(ConfigError, match=r"chain\.n"):
         chainrun.simulate(chain={"n": 0, "k": 1})
