@@ -109,12 +109,20 @@ def _run_pulses(run, name: str | None = None):
                             "output.sensors and output.sensor_dt to record them")
     if "wall_motion_amplitude" in run or float(run.attrs.get("final_drive_work", 0.0)):
         raise ChainrunError(f"{where}: {_DRIVEN}")
+    force = run["sensor_force"]
+    if "sensor" not in force.dims:     # one sensor picked by .sel(sensor=b): its own
+        force = force.expand_dims("sensor")
+    missing = [dim for dim in ("sample", "side") if dim not in force.dims]
+    if missing:
+        raise ChainrunError(f"{where}: sensor_force needs its dimension "
+                            f"{' and '.join(missing)} whole (both sides of each sensor "
+                            "ball, over its samples); select sensors or runs only")
     # a run of a sweep has the sweep's samples: NaN where it took none (a run that
     # ended sooner than another, or one sampled at other times)
-    run = run.dropna("sample", how="all", subset=["sensor_force"])
+    force = force.dropna("sample", how="all")
     return _as_dataset(measure_sensors(
-        run["sample"].values, run["sensor_force"].transpose("sample", "sensor", "side").values,
-        run["sensor"].values, units="si" if run.attrs.get("units") == "SI" else "paper",
+        force["sample"].values, force.transpose("sample", "sensor", "side").values,
+        force["sensor"].values, units="si" if run.attrs.get("units") == "SI" else "paper",
         diameter=run["diameter"].values if "diameter" in run else None,
         gap=run["gap"].values if "gap" in run else None,
         wall_gap=tuple(np.nan_to_num(run["wall_gap"].values)) if "wall_gap" in run

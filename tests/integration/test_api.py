@@ -134,6 +134,20 @@ def test_every_variable_has_a_short_label_for_plots_and_its_description():
     assert chainrun.open_sweep(tree)["chain.speed"].attrs["long_name"] == "speed (chain.speed)"
 
 
+def test_pulses_of_one_sensor_picked_by_sel():
+    from chainrun.errors import ChainrunError
+
+    ds = chainrun.simulate(chain={"n": 12, "k": 1, "alpha": 1.5},
+                           output={"sensors": [4, 8], "sensor_dt": 0.05},
+                           solver={"t_end": 20.0})
+    one = chainrun.pulses(ds.sel(sensor=8))
+    assert list(one["sensor"].values) == [8]
+    # the Hertz solitary wave's peak contact force, the paper's 0.640
+    assert one.peak_force.item() == pytest.approx(0.640, abs=2e-3)
+    with pytest.raises(ChainrunError, match="side"):
+        chainrun.pulses(ds.sel(side="towards ball 1"))
+
+
 def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
     with pytest.raises(ConfigError, match=r"chain\.n"):
         chainrun.simulate(chain={"n": 0, "k": 1})
