@@ -39,6 +39,7 @@ are those of the elastic line.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -260,7 +261,8 @@ def find_period(mass, stiffness, period: int | None = None) -> int:
         return int(np.argmax(bad)) if bad.any() else -1
 
     if period is not None:
-        if isinstance(period, bool) or int(period) != period or period < 0:
+        if (isinstance(period, bool) or not isinstance(period, numbers.Real)
+                or not math.isfinite(period) or int(period) != period or period < 0):
             raise ChainrunError(f"period: expected a number of balls >= 0, got {period!r}")
         period = int(period)
         if period == 0:

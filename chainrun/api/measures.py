@@ -10,11 +10,44 @@ variable carries its ``units`` and ``long_name``.
 
 from __future__ import annotations
 
+import os
+from numbers import Integral, Real
 from pathlib import Path
 
 from chainrun.api.runs import _UNITS, _experiment
 from chainrun.errors import ChainrunError
 from chainrun.paths import index_file
+
+
+#: What pulses and transmission take, for the error that names what they were given.
+_TAKES = ("a run (a Dataset of chainrun.open_run or chainrun.simulate, or a run file's "
+          "path) or a sweep (chainrun.open_sweep's Dataset, the DataTree chainrun.simulate "
+          "returns for one, or an output folder's path)")
+#: Datasets of chainrun's own that are not runs, by a variable only they have.
+_NOT_RUNS = (("omega", "a spectrum's (chainrun.spectrum)"),
+             ("peak_force", "pulses' (chainrun.pulses)"),
+             ("transmission", "a transmission's (chainrun.transmission)"))
+
+
+def _check_run(run, who: str) -> None:
+    """Raise a ``ChainrunError`` naming what ``run`` is if ``who`` cannot measure it."""
+    import os
+
+    import xarray as xr
+
+    from chainrun.store import RunData
+
+    if isinstance(run, xr.Dataset):
+        if "final_velocity" in run or "sensor_force" in run:
+            return
+        kind = next((text for name, text in _NOT_RUNS if name in run),
+                    "one without a run's variables (final_velocity, sensor_force)")
+        raise ChainrunError(f"{who}: expected {_TAKES}; got a Dataset, {kind}")
+    if isinstance(run, (xr.DataTree, str, os.PathLike, RunData)):
+        return
+    hint = (": give the run's Dataset, not one of its variables"
+            if isinstance(run, xr.DataArray) else "")
+    raise ChainrunError(f"{who}: expected {_TAKES}; got {type(run).__name__}{hint}")
 
 
 # ------------------------------------------------------------------------------ pulses
@@ -51,7 +84,8 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     ------
     chainrun.errors.ChainrunError
         For a run without force sensors, or a driven one (whose steady response
-        ``transmission`` measures), naming the run in a sweep;
+        ``transmission`` measures), naming the run in a sweep; for something not a run
+        or a sweep (a DataArray, a spectrum's Dataset), saying what it is;
         ``chainrun.errors.StoreError`` for a file or folder that cannot be read.
 
     Examples
@@ -70,6 +104,7 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
     from chainrun.api.runs import open_sweep
     from chainrun.analysis.pulse import measure_pulses
 
+    _check_run(run, "pulses")
     if isinstance(run, xr.DataTree):       # simulate's sweep: a child per run
         names = list(run.children)
         return _pulses_along_run([_run_pulses(run[name].to_dataset(), name)
@@ -80,7 +115,7 @@ def pulses(run) -> "xarray.Dataset":  # noqa: F821
         ids = [str(r) for r in run["run"].values]
         return _pulses_along_run([_run_pulses(run.isel(run=i), ids[i])
                                   for i in range(len(ids))], run)
-    path = Path(run) if isinstance(run, (str, Path)) else None
+    path = Path(run) if isinstance(run, (str, os.PathLike)) else None
     if path is not None and path.is_dir():
         return pulses(open_sweep(path))
     if path is not None:
@@ -242,8 +277,8 @@ def transmission(run, *, harmonics: int = 3, start: float | None = None,
         For a run without sensors or without one wall moving by one sine, a window
         without one whole period, too few samples per period for the harmonics, or a
         sweep whose runs share a frequency or differ in their lines (one line naming
-        the run); ``chainrun.errors.StoreError`` for a file or folder that cannot be
-        read.
+        the run); for something not a run or a sweep, or an option of the wrong type;
+        ``chainrun.errors.StoreError`` for a file or folder that cannot be read.
 
     Examples
     --------
@@ -258,6 +293,16 @@ def transmission(run, *, harmonics: int = 3, start: float | None = None,
 
     from chainrun.store import read_index, read_run
 
+    from chainrun.errors import show_value
+
+    _check_run(run, "transmission")
+    for name, value, kind, what in (("harmonics", harmonics, Integral, "a whole number >= 1"),
+                                    ("start", start, Real, "a time, or None"),
+                                    ("periods", periods, Integral, "a whole number >= 1, or None")):
+        if (value is None and name != "harmonics") or (
+                isinstance(value, kind) and not isinstance(value, bool)):
+            continue
+        raise ChainrunError(f"transmission: {name}: expected {what}, got {show_value(value)}")
     options = dict(harmonics=harmonics, start=start, periods=periods)
     if isinstance(run, xr.DataTree):       # simulate's sweep: a child per run
         return measure_sweep([child.to_dataset().assign_attrs(run_id=name)

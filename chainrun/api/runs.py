@@ -278,12 +278,17 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
     and hash, and the writing software's version.
 
     Raises ``chainrun.errors.StoreError`` (one line) for a file that is not a readable
-    chainrun run file.
+    chainrun run file, or a ``path`` that is not a path.
     """
     import xarray as xr
 
+    from chainrun.errors import StoreError
     from chainrun.store import read_run
 
+    if not isinstance(path, (str, os.PathLike)):
+        raise StoreError(f"open_run: expected a run file's path, got {type(path).__name__}"
+                         + (" (a Dataset is a run already open)"
+                            if isinstance(path, xr.Dataset) else ""))
     run = read_run(path)
     data, coords = _variables(run)
     si = run.units == "si"

@@ -148,6 +148,36 @@ def test_pulses_of_one_sensor_picked_by_sel():
         chainrun.pulses(ds.sel(side="towards ball 1"))
 
 
+def test_what_the_readers_and_measures_cannot_take_is_a_chainrun_error():
+    from chainrun.errors import ChainrunError, StoreError
+
+    ds = chainrun.simulate(chain={"n": 5, "k": 1, "alpha": 1.5})
+    spectrum = chainrun.spectrum(chain={"n": 5, "k": 0, "alpha": 1.5, "precompression": 1.0},
+                                 walls={"left": {}, "right": {}})
+    cases = [
+        (lambda: chainrun.open_run(ds), StoreError, "open_run: expected a run file's path, "
+                                                    "got Dataset"),
+        (lambda: chainrun.open_run(None), StoreError, "got NoneType"),
+        (lambda: chainrun.open_sweep(ds), StoreError, "open_sweep: expected an output "
+                                                      "folder's path or the DataTree"),
+        (lambda: chainrun.pulses(ds.velocity), ChainrunError, "pulses: expected a run.*got "
+                                                              "DataArray"),
+        (lambda: chainrun.pulses({"chain": {}}), ChainrunError, "got dict"),
+        (lambda: chainrun.pulses(spectrum), ChainrunError, "got a Dataset, a spectrum's"),
+        (lambda: chainrun.transmission(spectrum), ChainrunError, "a spectrum's"),
+        (lambda: chainrun.transmission(ds, harmonics="3"), ChainrunError,
+         "harmonics: expected a whole number >= 1, got '3'"),
+        (lambda: chainrun.transmission(ds, periods=2.5), ChainrunError, "periods: expected"),
+        (lambda: chainrun.spectrum(chain={"n": 5, "k": 0, "alpha": 1.5,
+                                          "precompression": 1.0},
+                                   walls={"left": {}, "right": {}}, period=[2]),
+         ChainrunError, r"period: expected a number of balls >= 0, got \[2\]"),
+    ]
+    for call, kind, message in cases:
+        with pytest.raises(kind, match=message):
+            call()
+
+
 def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
     with pytest.raises(ConfigError, match=r"chain\.n"):
         chainrun.simulate(chain={"n": 0, "k": 1})
