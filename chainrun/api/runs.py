@@ -456,6 +456,10 @@ def _experiment(config, tables: dict[str, Any], source: str = "<simulate>",
         raise ConfigError(source, [
             f"config: expected a path or a dict of the experiment's tables, got "
             f"{type(config).__name__}"])
+    if type(config).__module__.partition(".")[0] == "xarray":   # a Mapping, not tables
+        raise ConfigError(source, [
+            f"config: expected a path or a dict of the experiment's tables, got an xarray "
+            f"{type(config).__name__} (a result, not an experiment)"])
     if isinstance(config, (str, os.PathLike)):
         if tables:
             raise ConfigError(os.fspath(config), [
@@ -468,19 +472,35 @@ def _experiment(config, tables: dict[str, Any], source: str = "<simulate>",
     # written as YAML (numpy values as plain numbers and lists), then parsed, checked and
     # stored as an experiment file is; PyYAML writes 1e-06 as 1.0e-06, which YAML 1.1
     # reads back as a number (JSON's 1e-06 it would read as text)
-    plain = json.loads(json.dumps(data, default=_plain))
+    problems: list[str] = []
+    plain = _plain(data, "", problems)
+    if problems:
+        raise ConfigError(source, problems)
     text = yaml.safe_dump(plain, sort_keys=False, default_flow_style=None, width=88)
     return parse_experiment(text, "yaml", source, to_run=to_run)
 
 
-def _plain(value):
+def _plain(value, key: str, problems: list[str]):
+    """``value`` as plain numbers, text, lists and dicts (numpy's values, ranges and
+    tuples as lists, paths as text); what has no such form is a problem naming its key."""
     import numpy as np
 
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v, f"{key}.{k}" if key else str(k), problems)
+                for k, v in value.items()}
+    if isinstance(value, (list, tuple, range)):
+        return [_plain(v, f"{key}[{i}]", problems) for i, v in enumerate(value)]
     if isinstance(value, np.ndarray):
-        return value.tolist()
+        return _plain(value.tolist(), key, problems) if value.dtype == object else value.tolist()
     if isinstance(value, np.generic):
         return value.item()
-    raise TypeError(f"cannot use a {type(value).__name__} in an experiment")
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if value is None or isinstance(value, (str, int, float)):
+        return value
+    problems.append(f"{key}: cannot use a {type(value).__name__} in an experiment "
+                    "(a number, text, a list or a table)")
+    return None
 
 
 def simulate(config=None, /, *, check: bool = False,
@@ -497,7 +517,9 @@ def simulate(config=None, /, *, check: bool = False,
         ``final_velocity_spread`` and ``separation_velocity_spread``.
     **tables
         Tables of the experiment file as keyword arguments (``chain=``, ``output=``,
-        ``solver=``, ``sweep=``, ``name=``), added to a dict ``config``.
+        ``solver=``, ``sweep=``, ``name=``), added to a dict ``config``. Numpy arrays
+        and numbers, tuples and ranges are taken as lists and numbers, paths as text;
+        any other value is a ``ConfigError`` naming its key.
 
     Returns
     -------

@@ -187,6 +187,15 @@ def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
     config.write_text(CRADLE)
     with pytest.raises(ConfigError, match="keyword tables"):
         chainrun.simulate(config, chain={"n": 3})
+    with pytest.raises(ConfigError, match=r"output\.times: cannot use a set"):
+        chainrun.simulate(chain=TABLES["chain"], output={"times": {1.0, 2.0}})
+    with pytest.raises(ConfigError, match=r"chain\.mass\[2\]: cannot use a complex"):
+        chainrun.simulate(chain={**TABLES["chain"], "mass": [1, 1, 1j, 1, 1]})
+    ds = chainrun.simulate(chain=TABLES["chain"], output={"times": range(3)})
+    assert list(ds.time.values) == [0, 1, 2]
+    for call in (chainrun.simulate, chainrun.spectrum):
+        with pytest.raises(ConfigError, match="got an xarray Dataset"):
+            call(ds)
 
 
 def test_import_chainrun_is_light():
