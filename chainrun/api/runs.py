@@ -535,15 +535,19 @@ def simulate(config=None, /, *, check: bool = False,
     """
     import warnings
 
+    import numpy as np
     import xarray as xr
 
     from chainrun.check import energy_doubt
     from chainrun.config.doubts import doubts
-    from chainrun.errors import ChainrunError, ChainrunWarning
+    from chainrun.errors import ChainrunError, ChainrunWarning, ConfigError, show_value
     from chainrun.runner import run_file, simulate_run, sweep_specs
 
+    if not isinstance(check, (bool, np.bool_)):
+        raise ConfigError("<simulate>", [f"check: expected True or False, got "
+                                         f"{show_value(check)}"])
     experiment = _experiment(config, tables)
-    specs = sweep_specs(experiment, check=check)
+    specs = sweep_specs(experiment, check=bool(check))
     for doubt in doubts(specs):
         warnings.warn(doubt, ChainrunWarning, stacklevel=2)
     with tempfile.TemporaryDirectory(prefix="chainrun-") as tmp:

@@ -193,6 +193,8 @@ def test_bad_input_is_a_config_error_naming_the_key(tmp_path):
         chainrun.simulate(chain={**TABLES["chain"], "mass": [1, 1, 1j, 1, 1]})
     ds = chainrun.simulate(chain=TABLES["chain"], output={"times": range(3)})
     assert list(ds.time.values) == [0, 1, 2]
+    with pytest.raises(ConfigError, match="check: expected True or False, got 'no'"):
+        chainrun.simulate(chain=TABLES["chain"], check="no")
     for call in (chainrun.simulate, chainrun.spectrum):
         with pytest.raises(ConfigError, match="got an xarray Dataset"):
             call(ds)
