@@ -383,10 +383,14 @@ def open_sweep(folder) -> "xarray.Dataset":  # noqa: F821
     from chainrun.store import read_index
 
     if isinstance(folder, xr.DataTree):     # simulate's sweep: a child per run
-        if not folder.children:
+        runs = [child.to_dataset() for child in folder.children.values()]
+        if not runs:
             raise StoreError("open_sweep: the DataTree holds no runs")
-        return _along_run([child.to_dataset() for child in folder.children.values()],
-                          list(folder.children))
+        for name, ds in zip(folder.children, runs):
+            if "final_velocity" not in ds or "overrides" not in ds.attrs:
+                raise StoreError(f"open_sweep: {name} is not a run's Dataset (a sweep of "
+                                 "chainrun.simulate's, or an output folder, has runs)")
+        return _along_run(runs, list(folder.children))
     if not isinstance(folder, (str, os.PathLike)):
         raise StoreError(f"open_sweep: expected an output folder's path or the DataTree "
                          f"chainrun.simulate returns for a sweep, got "

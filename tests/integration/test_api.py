@@ -160,6 +160,10 @@ def test_what_the_readers_and_measures_cannot_take_is_a_chainrun_error():
         (lambda: chainrun.open_run(None), StoreError, "got NoneType"),
         (lambda: chainrun.open_sweep(ds), StoreError, "open_sweep: expected an output "
                                                       "folder's path or the DataTree"),
+        (lambda: chainrun.open_sweep(chainrun.spectrum(
+            chain={"n": 5, "k": 0, "alpha": 1.5, "precompression": 1.0},
+            walls={"left": {}, "right": {}}, sweep={"chain.precompression": [1.0, 2.0]})),
+         StoreError, "open_sweep: precompression=1.0 is not a run's Dataset"),
         (lambda: chainrun.pulses(ds.velocity), ChainrunError, "pulses: expected a run.*got "
                                                               "DataArray"),
         (lambda: chainrun.pulses({"chain": {}}), ChainrunError, "got dict"),
