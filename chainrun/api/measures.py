@@ -14,7 +14,7 @@ import os
 from numbers import Integral, Real
 from pathlib import Path
 
-from chainrun.api.runs import _UNITS, _experiment
+from chainrun.api.runs import _PAPER_UNIT, _UNITS, _experiment
 from chainrun.errors import ChainrunError
 from chainrun.paths import index_file
 
@@ -184,7 +184,7 @@ def _as_dataset(p):
     si = p.units == "si"
 
     def unit(quantity: str) -> str:
-        return UNITS["si"][quantity] if si else _UNITS
+        return UNITS["si"][quantity] if si else _PAPER_UNIT
 
     per_sensor = {
         "peak_force": (p.peak_force, "force", "largest contact force of the first pulse"),

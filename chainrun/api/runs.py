@@ -36,6 +36,9 @@ from chainrun.units import SWEPT_QUANTITY
 __all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
 _UNITS = "paper units (mass, stiffness and striker speed 1)"
+#: A quantity's ``units`` in the paper's units, short as an axis label takes it
+#: (``velocity [paper units]``); the Dataset's ``units`` attribute says what they are.
+_PAPER_UNIT = "paper units"
 
 #: Variables along ``ball``: (long name, quantity; None for numbers and names).
 _BALL_VARS = {
@@ -149,8 +152,8 @@ def _unit(quantity: str | None, units: str) -> str | None:
     if quantity is None:
         return None
     if quantity == "damping":
-        return "N s m-(1+beta)" if units == "si" else _UNITS
-    return UNITS["si"][quantity] if units == "si" else _UNITS
+        return "N s m-(1+beta)" if units == "si" else _PAPER_UNIT
+    return UNITS["si"][quantity] if units == "si" else _PAPER_UNIT
 
 
 def _variables(run) -> tuple[dict, dict]:
@@ -230,7 +233,7 @@ def _variables(run) -> tuple[dict, dict]:
     for name, exponents in (("stiffness", line.alpha), ("damping", line.damping_exponent),
                             ("wall_stiffness", values["wall_alpha"]),
                             ("wall_damping", values["wall_damping_exponent"])):
-        if name in out and "units" in out[name][2]:
+        if name in out and "units" in out[name][2] and units == "si":
             quantity = "damping" if name.endswith("damping") else "stiffness"
             out[name][2]["units"] = law_unit(quantity, exponents, units)
     for name, (dim, values) in coords.items():

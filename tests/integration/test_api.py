@@ -57,7 +57,11 @@ def test_open_run_reads_the_file(cradle_file):
     np.testing.assert_array_equal(ds.event_time.values, t)
     assert list(ds.ball.values) == [1, 2, 3, 4, 5]
     assert ds.attrs["n"] == 5 and ds.attrs["outcome"] == "terminal"
-    assert "paper units" in ds.velocity.attrs["units"]
+    # short, as an axis label takes it; the Dataset says what the paper's units are
+    assert ds.velocity.attrs["units"] == ds.final_velocity.attrs["units"] == "paper units"
+    assert "striker speed 1" in ds.attrs["units"]
+    assert {ds[name].attrs["units"] for name in ("stiffness", "damping", "mass")} == {
+        "paper units"}
     # Table 1 of the paper, K = 1: the last ball leaves at 0.9888
     assert ds.final_velocity.sel(ball=5).item() == pytest.approx(0.9888, abs=5e-5)
 
