@@ -343,12 +343,31 @@ def measure(run, *, harmonics: int = HARMONICS, start: float | None = None,
             data[name] = ("branch", spectrum[name].values / (2.0 * np.pi), {
                 "units": u["frequency"], "long_name": f"{name.replace('_', ' ')} of each "
                                                       "band of the infinite periodic line"})
-    out = xr.Dataset(data, coords={"sensor": ("sensor", np.asarray(balls)),
-                                   "harmonic": ("harmonic", np.arange(1, harmonics + 1))})
+    for name, label in _LABELS.items():
+        if name in data:
+            dims, values, meta = data[name]
+            data[name] = (dims, values, {**meta, "long_name": label,
+                                         "description": meta["long_name"]})
+    out = xr.Dataset(data, coords={
+        "sensor": ("sensor", np.asarray(balls), {"long_name": "sensor ball"}),
+        "harmonic": ("harmonic", np.arange(1, harmonics + 1),
+                     {"long_name": "harmonic", "description": "k of the frequency k f"})})
     for name in ("amplitude", "phase", "transmission"):
         out[name] = out[name].transpose("sensor", "harmonic")
     return out.assign_attrs(units="SI" if units == "si" else PAPER, driven_wall=side,
                             **attrs)
+
+
+#: The short ``long_name`` of each variable, which xarray's plots take for an axis
+#: label; the longer text it is built with is its ``description``.
+_LABELS = {
+    "amplitude": "force amplitude", "phase": "phase", "transmission": "transmission",
+    "mean_force": "mean force", "residual": "fit residual", "steady": "steady",
+    "frequency": "drive frequency", "drive_amplitude": "drive amplitude",
+    "reference_stiffness": "reference stiffness", "reference_force": "reference force",
+    "periods": "periods fitted", "window_start": "window start", "window_end": "window end",
+    "mode_frequency": "mode frequency", "band_bottom": "band bottom", "band_top": "band top",
+}
 
 
 def measure_sweep(runs, **options) -> xr.Dataset:
@@ -403,7 +422,8 @@ def measure_sweep(runs, **options) -> xr.Dataset:
                       data_vars="all", coords="minimal", combine_attrs="drop_conflicts")
     curve = curve.assign_coords(
         frequency=("frequency", f[order], first["frequency"].attrs),
-        run=("frequency", [ids[i] for i in order]))
+        run=("frequency", [ids[i] for i in order],
+             {"long_name": "run", "description": "the id of the run at each frequency"}))
     # (the runs' ids are the coordinate run: the curve is of no one run)
     out = xr.merge([curve, spectrum], combine_attrs="override").assign_attrs(
         experiment=first.attrs.get("experiment", ""))

@@ -48,6 +48,16 @@ def test_a_folder_its_dataset_and_a_run_give_the_same_transmission(sweep):
     assert far.sel(frequency=0.45) < 1e-3 * far.sel(frequency=0.2)
 
 
+def test_every_variable_has_a_short_label_for_plots_and_its_description(sweep):
+    curve = chainrun.transmission(sweep)
+    for name, var in curve.variables.items():
+        label = var.attrs.get("long_name", "")
+        assert label and len(label) <= 40 and ":" not in label, (name, label)
+    assert curve.transmission.attrs["long_name"] == "transmission"
+    assert "reference_force" in curve.transmission.attrs["description"]
+    assert curve.frequency.attrs["long_name"] == "drive frequency"
+
+
 def test_the_figure_draws_the_measured_curve_and_the_bands(sweep):
     curve = chainrun.transmission(sweep)
     with style(colour=True):
