@@ -338,6 +338,18 @@ def _units_of(quantity: str, units: str) -> str:
     return UNITS["si"][quantity] if units == "si" else PAPER
 
 
+
+#: The short ``long_name`` of each variable and coordinate, which xarray's plots take
+#: for an axis label; the longer text it is built with is its ``description``.
+_LABELS = {
+    "omega": "angular frequency", "frequency": "frequency",
+    "static_compression": "static compression", "static_force": "static force",
+    "linear_stiffness": "linear stiffness", "shape": "mode shape", "mode": "mode",
+    "ball": "ball", "contact": "contact", "q": "wavenumber", "branch": "branch",
+    "dispersion": "angular frequency", "band_bottom": "band bottom", "band_top": "band top",
+}
+
+
 def line_spectrum(line: Line, units: str = "paper", *, period: int | None = None):
     """The linear spectrum of ``line`` at rest in its static state, as an xarray Dataset.
 
@@ -441,6 +453,11 @@ def line_spectrum(line: Line, units: str = "paper", *, period: int | None = None
                                 if shapes else
                                 f"none: no shapes for more than {MAX_SHAPE_BALLS} balls"),
     }
+    for table in (data, coords):
+        for name, (dims, values, meta) in table.items():
+            if name in _LABELS:
+                table[name] = (dims, values, {**meta, "long_name": _LABELS[name],
+                                              "description": meta["long_name"]})
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 

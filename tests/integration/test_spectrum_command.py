@@ -76,6 +76,12 @@ def test_the_example_in_si(cli, tmp_path):
     ds = read_spectrum(tmp_path / "gc" / "run.h5")
     assert ds.attrs["units"] == "SI" and ds.attrs["period"] == 2
     assert ds.omega.attrs["units"] == "rad/s"
+    # short labels for plots' axes, kept by the file; what each is in its description
+    for name, var in ds.variables.items():
+        label = var.attrs.get("long_name", "")
+        assert label and len(label) <= 40 and ":" not in label, (name, label)
+    assert ds.shape.attrs["long_name"] == "mode shape"
+    assert "largest magnitude 1" in ds.shape.attrs["description"]
     # stated in the units' prefixes, a gap in krad/s
     assert re.search(r"band gap: [\d.]+ krad/s \.\.\. [\d.]+ krad/s \(f [\d.]+ kHz \.\.\. "
                      r"[\d.]+ kHz\)", result.output)
