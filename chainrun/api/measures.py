@@ -31,8 +31,6 @@ _NOT_RUNS = (("omega", "a spectrum's (chainrun.spectrum)"),
 
 def _check_run(run, who: str) -> None:
     """Raise a ``ChainrunError`` naming what ``run`` is if ``who`` cannot measure it."""
-    import os
-
     import xarray as xr
 
     from chainrun.store import RunData
