@@ -27,13 +27,13 @@ from chainrun.solver.drive import Drive, Sine
 SINE_KEYS = ("amplitude", "frequency", "ramp")
 #: What a required key of a sine is, by the drive's quantity, for the message that asks
 #: for it.
+_FREQUENCY = "the sine's frequency f, in cycles per unit of time; Hz in SI"
 _MEANING = {
     ("amplitude", "displacement"): "the sine's amplitude A, the wall's largest "
                                    "displacement from its place; m in SI",
     ("amplitude", "force"): "the sine's amplitude, the force's largest value; N in SI",
-    ("frequency", "displacement"): "the sine's frequency f, in cycles per unit of time; "
-                                   "Hz in SI",
-    ("frequency", "force"): "the sine's frequency f, in cycles per unit of time; Hz in SI",
+    ("frequency", "displacement"): _FREQUENCY,
+    ("frequency", "force"): _FREQUENCY,
 }
 
 

@@ -382,33 +382,35 @@ def test_a_run_stops_before_its_file_fills_the_disk(tmp_path, monkeypatch):
     assert not list(tmp_path.iterdir())  # the partial file discarded
 
 
+def _simulated_with_warnings(folder, name: str, text: str):
+    """``chainrun simulate`` of the experiment ``text``: its result and stderr's warnings."""
+    path = folder / f"{name}.toml"
+    path.write_text(text)
+    result = CliRunner().invoke(main, ["simulate", str(path), "-o", str(folder / name)])
+    assert result.exit_code == 0, result.output
+    return path, result, [line for line in result.stderr.splitlines() if "warning" in line]
+
+
 def test_a_doubtful_input_and_a_far_off_balance_are_warned_of_and_run(tmp_path):
     from chainrun.errors import ChainrunWarning
 
     # ten 2 cm steel beads whose wall overlaps the last by a metre: a typo, which runs,
     # its balls leaving at hundreds of km/s; its balance holds to the rounding of the
     # gigajoules the overlap put in (|dE|/E relative to them, not to the striker's mJ)
-    path = tmp_path / "overlap.toml"
-    path.write_text('name = "overlap"\nunits = "si"\n[chain]\nn = 10\nk = 1\nspeed = 0.5\n'
-                    'diameter = 0.02\nmaterial = "steel"\n[walls.right]\n'
-                    'material = "steel"\ngap = -1.0\n')
-    result = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path / "out")])
-    assert result.exit_code == 0, result.output
-    warned = [line for line in result.stderr.splitlines() if "warning" in line]
+    _, result, warned = _simulated_with_warnings(
+        tmp_path, "overlap", 'name = "overlap"\nunits = "si"\n[chain]\nn = 10\nk = 1\n'
+        'speed = 0.5\ndiameter = 0.02\nmaterial = "steel"\n[walls.right]\n'
+        'material = "steel"\ngap = -1.0\n')
     assert len(warned) == 1
     assert warned[0].startswith("chainrun: warning: walls.right.gap: an overlap of 1 m")
     error = float(re.search(r"\|dE\|/E = ([\d.e+-]+),", result.stdout).group(1))
     assert error < 1e-12
     # eight damped beads against a wall at rtol 1e-5: a balance off by 7e-6 of the
     # impact energy, far above its rounding, is warned of, from the command and the API
-    path = tmp_path / "loose.toml"
-    path.write_text('name = "loose"\nunits = "si"\n[chain]\nn = 8\nk = 1\nspeed = 0.5\n'
-                    'diameter = 0.0254\nmaterial = "steel"\nrestitution = 0.95\n'
-                    'damping_law = "tsuji"\n[walls.right]\nmaterial = "steel"\n'
-                    '[solver]\nrtol = 1e-5\n')
-    result = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path / "loose")])
-    assert result.exit_code == 0, result.output
-    warned = [line for line in result.stderr.splitlines() if "warning" in line]
+    path, _, warned = _simulated_with_warnings(
+        tmp_path, "loose", 'name = "loose"\nunits = "si"\n[chain]\nn = 8\nk = 1\n'
+        'speed = 0.5\ndiameter = 0.0254\nmaterial = "steel"\nrestitution = 0.95\n'
+        'damping_law = "tsuji"\n[walls.right]\nmaterial = "steel"\n[solver]\nrtol = 1e-5\n')
     assert len(warned) == 1
     assert warned[0].startswith("chainrun: warning: run: its energy balance is off by 7.1e-06")
     with pytest.warns(ChainrunWarning) as caught:
