@@ -142,6 +142,15 @@ def format_value(value: float, quantity: str, units: str, digits: int = 4,
     return f"{text} {scaled.unit}" if scaled.unit else text
 
 
+def run_message(sol, units: str) -> str:
+    """A solution's message (``chainrun.solver.Solution``) in the run's units: its
+    time with a unit in SI (``terminal state reached at t = 1.19308 ms``), as the
+    solver writes it in the paper's."""
+    if units != "si":
+        return sol.message
+    return sol.message_with(lambda t: format_value(t, "time", units, 6))
+
+
 def end_phrase(terminal, ends, units: str) -> str:
     """When the velocities at the end of some runs were taken, for a label: "" where
     every run reached its terminal state (``terminal``, one flag a run: they are final),

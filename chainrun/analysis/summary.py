@@ -115,6 +115,8 @@ class RunSummary:
     static_load: float = 0.0
     reference: tuple[float, str] = (1.0, "the impact speed")
     energy_floor: float = 0.0
+    momentum_scale: float = 1.0  # M V of the line's scales, the unit of momentum_error
+    rebound_below: float = 0.0  # a ball rebounds below minus this (the velocity floor)
 
     @property
     def dissipated(self) -> float:
@@ -132,10 +134,10 @@ def _span(a: np.ndarray, fmt) -> str:
     return fmt(lo) if lo == hi else f"{fmt(lo)} ... {fmt(hi)}"
 
 
-def describe_line(line, units: str) -> str:
+def describe_line(line, units: str, precompression: float | None = None) -> str:
     """The line for a person, in brief: its spheres (material and diameter) or masses,
-    contacts, gaps, forces, damping and walls; "" for the paper's line, which N, K and
-    alpha say whole."""
+    contacts, gaps, forces (a ``precompression``'s said as one), damping and walls; ""
+    for the paper's line, which N, K and alpha say whole."""
     from chainrun.units import format_value
 
     if line.is_paper and units != "si":
@@ -159,7 +161,11 @@ def describe_line(line, units: str) -> str:
                      f"alpha {alpha}")
     if np.any(line.gap):
         parts.append(f"gaps {_span(line.gap, quantity('gap'))}")
-    if np.any(line.force):
+    if precompression and np.count_nonzero(line.force) == 1:
+        ball = int(np.flatnonzero(line.force)[0]) + 1
+        parts.append(f"precompressed {format_value(float(precompression), 'force', units)} "
+                     f"(a static force on ball {ball}, held by the right wall)")
+    elif np.any(line.force):
         forced = int(np.count_nonzero(line.force))
         parts.append(f"forces on {forced} ball{'s' * (forced != 1)}, "
                      f"{_span(line.force[line.force != 0], quantity('force'))}")
@@ -264,6 +270,8 @@ def summarize(run) -> RunSummary:
         drive_work=work,
         static_load=load,
         reference=reference_speed(line),
+        momentum_scale=scales.get("mass", 1.0) * scales.get("velocity", 1.0),
+        rebound_below=floor,
         dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),
@@ -271,7 +279,8 @@ def summarize(run) -> RunSummary:
         first_time=float(run.times[0]) if run.times.size else math.nan,
         last_time=float(run.times[-1]) if run.times.size else math.nan,
         file_bytes=os.path.getsize(run.path),
-        line=describe_line(line, run.units),
+        line=describe_line(line, run.units, (run.parameters.get("config_resolved", {})
+                                             .get("chain", {}).get("precompression"))),
         walls=sum(w is not None for w in line.walls),
         check=run.check,
     )

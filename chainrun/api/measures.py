@@ -218,13 +218,15 @@ def _as_dataset(p):
             speeds.append(("backward_wave_speed_si", p.backward_speed_si, "m/s",
                            "metres per second", " towards ball 1"))
     for name, speed, units, what, way in speeds:
+        # the speed in balls beside the one in m/s: told apart by their labels
+        label = f"wave speed{way}" + (" in balls" if si and not name.endswith("_si") else "")
         data[name] = ((), speed.value, {
-            "units": units, "long_name": f"wave speed{way}",
+            "units": units, "long_name": label,
             "description": f"wave speed{way} in {what}: least-squares slope of the "
                            f"measured contacts' positions against their peak times "
                            f"({speed.points} sensors)"})
         data[f"{name}_error"] = ((), speed.error, {
-            "units": units, "long_name": f"wave speed{way} uncertainty",
+            "units": units, "long_name": f"{label} uncertainty",
             "description": "standard uncertainty of the wave speed, from the fit's "
                            "residuals (NaN with two sensors)"})
     sensor = {"long_name": "sensor ball", "description": "the ball that carries the sensor"}

@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 from collections.abc import Mapping
@@ -31,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from chainrun.paths import index_file
-from chainrun.units import SWEPT_QUANTITY
+from chainrun.units import SWEPT_QUANTITY, UNITS
 
 __all__ = ["open_run", "open_sweep", "pulses", "simulate", "spectrum", "transmission"]
 
@@ -230,9 +231,12 @@ def _variables(run) -> tuple[dict, dict]:
     for name, (dims, array, meta, quantity) in data.items():
         unit = _unit(quantity, units)
         out[name] = (dims, array, _labelled(name, meta) | ({"units": unit} if unit else {}))
+    # a missing wall's coefficient is NaN: its unit is the contacts' law's
+    has_wall = np.isfinite(np.asarray(values["wall_alpha"], dtype=float)).any()
     for name, exponents in (("stiffness", line.alpha), ("damping", line.damping_exponent),
-                            ("wall_stiffness", values["wall_alpha"]),
-                            ("wall_damping", values["wall_damping_exponent"])):
+                            ("wall_stiffness", values["wall_alpha"] if has_wall else line.alpha),
+                            ("wall_damping", values["wall_damping_exponent"]
+                             if has_wall else line.damping_exponent)):
         if name in out and "units" in out[name][2] and units == "si":
             quantity = "damping" if name.endswith("damping") else "stiffness"
             out[name][2]["units"] = law_unit(quantity, exponents, units)
@@ -242,6 +246,10 @@ def _variables(run) -> tuple[dict, dict]:
         coords[name] = (dim, values, {"long_name": label, "description": text,
                                       **({"units": unit} if unit else {})})
     return out, coords
+
+
+#: What a run's parameter left unset reads as in its Dataset's attributes, as in its file.
+_UNSET = {"t_end": math.nan, "max_events": -1}
 
 
 def open_run(path) -> "xarray.Dataset":  # noqa: F821
@@ -299,7 +307,8 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
               if k not in ("config_resolved", "overrides")}
     scales = run.model["scales"] if run.model else {}
     attrs = {
-        **{k: ("none" if v is None else v) for k, v in params.items()},
+        # as the run file has them: no t_end NaN, no event limit -1 (docs/schema.md)
+        **{k: (_UNSET.get(k, "none") if v is None else v) for k, v in params.items()},
         "overrides": json.dumps(run.parameters.get("overrides", {})),
         "outcome": run.outcome, "terminal": int(run.terminal), "end_time": run.end_time,
         "message": run.message, "units": "SI" if si else _UNITS,
@@ -307,6 +316,8 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
         "creator_version": run.creator_version, "created": run.created,
         **{f"diagnostics_{k}": v for k, v in run.diagnostics.items()},
         **{f"scales_{k}": v for k, v in scales.items()},
+        **{f"scales_{k}_unit": UNITS[run.units]["position" if k == "length" else k]
+           for k in scales},
         **({"check_rtol": run.check.rtol, "check_outcome": run.check.outcome}
            if run.check is not None else {}),
     }

@@ -90,14 +90,18 @@ def _balls(s, threshold: str) -> list[str]:
     if not s.terminal:
         return [f"balls     at t = {format_value(s.end_time, 'time', s.units, 6)}, before "
                 f"the terminal state: {moving}"]
+    # a velocity within the solver's floor is rounding, not a rebound
+    below = format_value(s.rebound_below, "velocity", s.units, 3)
     return [f"balls     {moving}",
-            f"          {s.rebounding} rebound (v < 0), {s.ejected} ejected (v > 1% of the "
-            f"impact speed, {threshold}), {s.left_behind} left behind"]
+            f"          {s.rebounding} rebound (v < -{below}, the velocity floor), "
+            f"{s.ejected} ejected (v > 1% of the impact speed, {threshold}), "
+            f"{s.left_behind} left behind"]
 
 
-def _pulse_lines(p) -> list[str]:
+def _pulse_lines(p, static: float | None = None) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
-    the wave's speed when two sensors or more saw it."""
+    the wave's speed when two sensors or more saw it; a precompressed line's peaks
+    said to hold its ``static`` force."""
     from chainrun.units import format_measured, format_value, format_with_error, scale_for
 
     # measured values keep their trailing zeros (31.700 N beside 33.317 N)
@@ -120,7 +124,9 @@ def _pulse_lines(p) -> list[str]:
         if not np.isfinite(p.peak_force[i]):
             lines.append(f"ball {ball}: no whole pulse recorded")
             continue
-        lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])} at "
+        held = (f" (the static {format_value(float(static), 'force', p.units)} included)"
+                if static else "")
+        lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])}{held} at "
                      f"{t(p.peak_time[i])}, width (FWHM) "
                      f"{crossing(p.width[i], width_error[i])}, arrival "
                      f"{crossing(p.arrival_time[i], arrival_error[i])}; peak of the mean "
@@ -216,7 +222,7 @@ def render(s, sensors=()) -> str:
         f"at most {min(s.max_window, s.n)} balls integrated at once, {s.wall_time:.2f} s",
         *([f"          {s.closed_form} isolated collisions taken whole"]
           if s.closed_form else []),
-        f"accuracy  {momentum_text(s.momentum_error)}, |dE|/E = {s.energy_error:.1e} "
+        f"accuracy  {momentum_text(s.momentum_error, s.units, s.momentum_scale)}, |dE|/E = {s.energy_error:.1e} "
         f"({rounding_text(s)[2:-1] + '; ' if rounding_text(s) else ''}projection corrected "
         f"{s.energy_correction:.1e} of E); rtol {s.rtol:g}",
         f"check     {_check(s)}",
@@ -396,7 +402,8 @@ def _sensors(run) -> list[str]:
     if not run.sensor_balls.size:
         return []
     if _pulsed(run):
-        return _pulse_lines(measure_pulses(run))
+        chain = run.parameters.get("config_resolved", {}).get("chain", {})
+        return _pulse_lines(measure_pulses(run), chain.get("precompression"))
     from chainrun.analysis.transmission import HARMONICS, measure
 
     # the API's fit (its harmonics), or as many harmonics as the sampling resolves,

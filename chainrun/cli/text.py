@@ -32,9 +32,16 @@ def rounding_text(run) -> str:
     return f" (within its rounding, {floor:.1e})"
 
 
-def momentum_text(error: float) -> str:
-    """|dP| for a summary (n/a in files that did not check it: older ones, with a wall)."""
-    return f"|dP| = {error:.1e}" if math.isfinite(error) else "|dP| n/a"
+def momentum_text(error: float, units: str = "paper", scale: float = 1.0) -> str:
+    """|dP| for a summary, in the run's units: ``error`` is relative to the momentum
+    of the line's scales (``Diagnostics.momentum_error``), ``scale`` that momentum
+    (M V; 1 in paper units); n/a in files that did not check it (older ones, with a
+    wall)."""
+    if not math.isfinite(error):
+        return "|dP| n/a"
+    if units == "si":
+        return f"|dP| = {error * scale:.1e} N s"
+    return f"|dP| = {error:.1e}"
 
 
 def run_line(run) -> str:
@@ -54,7 +61,7 @@ def run_line(run) -> str:
     else:
         how = run.message
     text = (f"{how}, {count(run.events, 'events')}, {count(run.steps, 'steps')}, "
-            f"{momentum_text(run.momentum_error)}, |dE|/E = {run.energy_error:.1e}"
+            f"{momentum_text(run.momentum_error, run.units, run.momentum_scale)}, |dE|/E = {run.energy_error:.1e}"
             + rounding_text(run) + ", "
             + (f"dissipated {run.dissipated:.1%} of the "
                f"{'energy taken up' if run.driven else 'impact energy'}, "

@@ -44,6 +44,7 @@ class RunSummary:
     speed_name: str = "the impact speed"
     driven: bool = False  # the line is driven: it took up its impact and the drives' work
     energy_floor: float = 0.0  # the energy_error rounding alone can leave (Diagnostics)
+    momentum_scale: float = 1.0  # M V of the line's scales, the unit of momentum_error
 
     def index_entry(self) -> dict:
         return dict(

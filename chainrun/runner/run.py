@@ -15,6 +15,7 @@ from chainrun.config import RunSpec
 from chainrun.errors import StoreError
 from chainrun.paths import run_file
 from chainrun.runner.results import RunSummary
+from chainrun.units import run_message
 
 #: ``on_progress(label, t)``: the simulated time t of a run computed in this process;
 #: the label is the run's id, and while its check runs (``solver.check``), the id
@@ -122,12 +123,12 @@ def simulate_run(spec: RunSpec, outdir, *, on_progress: ProgressHook | None = No
         outcome=sol.outcome.value, ok=sol.outcome.ok, terminal=sol.terminal,
         end_time=sol.end_time, events=d.events, steps=d.steps,
         momentum_error=d.momentum_error, energy_error=d.energy_error,
-        wall_time=d.wall_time, config_hash=spec.config_hash, message=sol.message,
+        wall_time=d.wall_time, config_hash=spec.config_hash, message=run_message(sol, spec.units),
         final_velocity=sol.final_velocity,
         dissipated=_share(sol.dissipated_energy, line, sol.drive_energy, sol.end_time),
         units=spec.units,
         check=check, **_speed(line), driven=line.is_driven,
-        energy_floor=d.energy_floor,
+        energy_floor=d.energy_floor, momentum_scale=_momentum_scale(line),
     )
 
 
@@ -166,6 +167,12 @@ def _speed(line) -> dict:
     return {"speed": speed, "speed_name": name}
 
 
+def _momentum_scale(line) -> float:
+    """The momentum of the line's scales, M V: the unit of its momentum error."""
+    scales = line.scales()
+    return scales.mass * scales.velocity
+
+
 def _share(dissipated: float, line, work: float = 0.0, end_time: float = 0.0) -> float:
     """``dissipated`` as a share of the energy the line took up by ``end_time``: its
     impact energy, plus on a driven line the drives' ``work`` beyond the static load's
@@ -200,5 +207,5 @@ def read_summary(path, spec: RunSpec) -> RunSummary:
         dissipated=_share(run.dissipated_energy, run.line, run.drive_energy, run.end_time),
         units=run.units,
         check=run.check, **_speed(run.line), driven=run.line.is_driven,
-        energy_floor=float(d.get("energy_floor", 0.0)),
+        energy_floor=float(d.get("energy_floor", 0.0)), momentum_scale=_momentum_scale(run.line),
     )

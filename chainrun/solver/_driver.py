@@ -270,7 +270,7 @@ def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
     wall = time.perf_counter() - wall0
 
     event_time = np.concatenate(ev_t)
-    message = _message(outcome, t_final * tscale, int(S.ints[_state.I_EVTOTAL]), S, P)
+    message = _message(outcome, int(S.ints[_state.I_EVTOTAL]), S, P)
     diagnostics = _diagnostics(P, S, y_final, v_final, t_final, wall, rtol,
                                int(event_time.size))
     per_contact = S.cp[_state.C_DISS] * sc.energy if P.damped else np.zeros(P.nb - 1)
@@ -283,8 +283,8 @@ def run(line: Line, times=(), *, t_end=None, rtol=DEFAULT_RTOL, max_events=None,
     return Solution(
         n=n, k=strikers(line),
         alpha=float(alphas[0]) if alphas.size and np.all(alphas == alphas[0]) else math.nan,
-        outcome=outcome, message=message,
-        end_time=t_final * tscale, terminal=outcome is Outcome.TERMINAL,
+        outcome=outcome, message=message.format(t=f"{t_final * tscale:.6g}"),
+        message_template=message, end_time=t_final * tscale, terminal=outcome is Outcome.TERMINAL,
         final_position=P.positions(y_final), final_velocity=P.velocities(v_final),
         separation_time=S.sep_t[P.balls] * tscale,
         separation_velocity=S.sep_v[P.balls] * sc.velocity,
@@ -365,18 +365,19 @@ def _diagnostics(P: _Prepared, S, y, v, t, wall, rtol, events) -> Diagnostics:
     )
 
 
-def _message(outcome: Outcome, t: float, events: int, S: _state.State,
-             P: _Prepared) -> str:
+def _message(outcome: Outcome, events: int, S: _state.State, P: _Prepared) -> str:
+    """The run's message, its end time left as ``{t}`` for the caller to write in
+    the line's units (``Solution.message_with``)."""
     if outcome is Outcome.TERMINAL:
-        return f"terminal state reached at t = {t:.6g} after {events} events"
+        return f"terminal state reached at t = {{t}} after {events} events"
     if outcome is Outcome.STOP_TIME:
-        return f"stopped at t_end = {t:.6g} after {events} events"
+        return f"stopped at t_end = {{t}} after {events} events"
     where = _window_text(S, P)
     if outcome is Outcome.EVENT_LIMIT:
-        return f"event limit ({events}) reached at t = {t:.6g}, {where}"
+        return f"event limit ({events}) reached at t = {{t}}, {where}"
     if outcome is Outcome.NON_FINITE:
-        return f"state became non-finite at t = {t:.6g}, {where}"
-    return f"step size underflow at t = {t:.6g}, {where}"
+        return f"state became non-finite at t = {{t}}, {where}"
+    return f"step size underflow at t = {{t}}, {where}"
 
 
 def _window_text(S: _state.State, P: _Prepared) -> str:

@@ -130,7 +130,8 @@ class Solution:
     alpha : float
     outcome : Outcome
     message : str
-        One line for a person, naming the time and place of any failure.
+        One line for a person, naming the time and place of any failure (the time as
+        a bare number: ``message_with`` writes it with a unit).
     end_time : float
         The terminal time (the last event before which no collision can happen
         again), or the stop time when stopped by ``t_end``.
@@ -217,6 +218,14 @@ class Solution:
     wall_impulse: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
     drive_work: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     drive_energy: float = 0.0
+    message_template: str = field(default="", repr=False)
+
+    def message_with(self, time_text: Callable[[float], str]) -> str:
+        """``message`` with its time written by ``time_text`` (``1.19308 ms`` for a
+        line in SI units, where ``message`` says ``0.00119308``)."""
+        if not self.message_template:
+            return self.message
+        return self.message_template.format(t=time_text(self.end_time))
 
 
 #: The floor never goes below the rounding noise of order-one velocities: behind a

@@ -380,7 +380,8 @@ def _read_model(h5: h5py.File) -> dict[str, Any] | None:
     drives = group["drives"] if "drives" in group else {}
     model["drives"] = tuple((int(_h5.attr(drives[key], "ball")) - 1, _read_drive(drives[key]))
                             for key in sorted(drives, key=int))
-    model["scales"] = {key: float(value) for key, value in _h5.get(group, "scales").attrs.items()}
+    model["scales"] = {key: float(value) for key, value in _h5.get(group, "scales").attrs.items()
+                       if not key.endswith("_unit")}
     return model
 
 

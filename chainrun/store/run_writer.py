@@ -42,7 +42,7 @@ from chainrun.solver import Drive, EventKind, Solution
 from chainrun.store import _h5
 from chainrun.store._h5 import BALL_CHUNK, GZIP, RUN_FORMAT
 from chainrun.limits import free_disk, human_size
-from chainrun.units import UNITS, law_unit
+from chainrun.units import UNITS, law_unit, run_message
 
 if TYPE_CHECKING:  # the config parser (pydantic, YAML) is not needed to write files
     from chainrun.config import RunSpec
@@ -283,6 +283,7 @@ class RunWriter:
         sc = line.scales()
         for name in ("mass", "length", "time", "velocity", "force"):
             scales.attrs[name] = np.float64(getattr(sc, name))
+            scales.attrs[f"{name}_unit"] = units["position" if name == "length" else name]
 
     # -- writing -----------------------------------------------------------------
 
@@ -392,9 +393,10 @@ class RunWriter:
                     "N; 0 where there is no wall)")
         ds.attrs["unit"] = UNITS[self._units]["momentum"]
         results.attrs["end_time"] = np.float64(sol.end_time)
+        results.attrs["end_time_unit"] = UNITS[self._units]["time"]
         results.attrs["terminal"] = np.bool_(sol.terminal)
         results.attrs["outcome"] = str(getattr(sol.outcome, "value", sol.outcome))
-        results.attrs["message"] = str(sol.message)
+        results.attrs["message"] = run_message(sol, self._units)
 
         events = _h5.group(h5, "events")
         t = np.asarray(sol.event_time, dtype=np.float64).reshape(-1)

@@ -3,6 +3,7 @@ an xarray Dataset, the same as the command's run file holds."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 
@@ -136,6 +137,26 @@ def test_every_variable_has_a_short_label_for_plots_and_its_description():
     assert "NaN" in ds.separation_time.attrs["description"]
     assert ds["sample"].attrs["long_name"] == "sample time"
     assert chainrun.open_sweep(tree)["chain.speed"].attrs["long_name"] == "speed (chain.speed)"
+
+
+def test_an_si_datasets_attributes_carry_units_and_the_files_conventions():
+    """A line of steel beads without walls, to its terminal state: its unset t_end and
+    event limit read as in the file (NaN, -1: docs/schema.md), the absent walls'
+    coefficients have the contacts' law's unit, the scales have theirs, and the
+    pulses' two wave speeds are told apart by their labels."""
+    ds = chainrun.simulate(units="si", chain={"n": 30, "k": 1, "speed": 0.1,
+                                              "diameter": 0.008, "material": "steel"},
+                           output={"sensors": [10, 20], "sensor_dt": 1e-7,
+                                   "sensor_end": 6e-4})
+    assert np.isnan(ds.attrs["t_end"]) and ds.attrs["max_events"] == -1
+    assert ds.wall_stiffness.attrs["units"] == "N m-1.5"
+    assert {ds.attrs[f"scales_{k}_unit"] for k in ("mass", "length", "time", "velocity",
+                                                  "force")} == {"kg", "m", "s", "m/s", "N"}
+    assert re.fullmatch(r"terminal state reached at t = [\d.]+ [mµ]s after \d+ events",
+                        ds.attrs["message"])
+    p = chainrun.pulses(ds)
+    assert p.wave_speed.attrs["units"] == "ball/s" and p.wave_speed_si.attrs["units"] == "m/s"
+    assert p.wave_speed.attrs["long_name"] != p.wave_speed_si.attrs["long_name"]
 
 
 def test_pulses_of_one_sensor_picked_by_sel():

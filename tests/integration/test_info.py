@@ -233,6 +233,55 @@ def test_a_checked_runs_velocities_show_the_digits_its_table_shows(tmp_path):
         assert value == table[ball], (ball, value, table[ball])
 
 
+def test_an_si_runs_accuracy_and_counts_say_what_they_measure(tmp_path):
+    """61 stainless beads of 8 mm struck at 0.1 m/s: the balls behind the wave end
+    within rounding of rest, 11 of them at velocities in (-1e-13, 0) m/s. The rebound
+    count is of the balls below minus the velocity floor its label names (the default
+    rtol 1e-12 of the impact speed: 100 fm/s), counted here from the file; |dP| is a
+    momentum in N s (rounding's: below 1e-14 of the striker's momentum), and the run
+    ends at a time with its unit, in the file as in words."""
+    out = tmp_path / "out"
+    config = tmp_path / "sol.toml"
+    config.write_text('name = "sol"\nunits = "si"\n[chain]\nn = 61\nk = 1\nspeed = 0.1\n'
+                      'diameter = 0.008\nmaterial = "stainless_steel"\n')
+    assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+    with h5py.File(out / "run.h5") as f:
+        v = f["results/final_velocity"][()]
+        m = f["model/mass"][()]
+        results = dict(f["results"].attrs)
+    text = info(out / "run.h5").stdout
+    floor = 1e-12 * 0.1
+    assert np.any((v < 0) & (v >= -floor))  # (what the count must not take for rebounds)
+    counts = re.search(r"(\d+) rebound \(v < -100 fm/s, the velocity floor\), (\d+) ejected",
+                       field(text, "  "))
+    assert counts is not None, text
+    assert int(counts.group(1)) == int(np.sum(v < -floor))
+    dp = re.search(r"\|dP\| = ([\d.e+-]+) N s", field(text, "accuracy"))
+    assert dp is not None and float(dp.group(1)) <= 1e-14 * m[0] * 0.1
+    assert results["end_time_unit"] == "s"
+    assert results["message"] == (f"terminal state reached at t = "
+                                  f"{results['end_time'] * 1e3:.6g} ms after 60 events")
+
+
+def test_a_precompressed_runs_summary_names_its_precompression(tmp_path):
+    """The line's precompression (a static force on the first ball at rest, held by
+    the right wall) is said as one, and each peak force is said to include it."""
+    out = tmp_path / "out"
+    config = tmp_path / "pre.toml"
+    config.write_text('name = "pre"\nunits = "si"\n[chain]\nn = 30\nk = 1\nspeed = 0.1\n'
+                      'diameter = 0.008\nmaterial = "stainless_steel"\nprecompression = 1.0\n'
+                      '[walls.right]\n[output]\nsensors = [10, 20]\nsensor_dt = 1e-7\n'
+                      '[solver]\nt_end = 6e-4\n')
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = info(out / "run.h5").stdout
+    assert "precompressed 1 N (a static force on ball 2, held by the right wall)" in field(
+        text, "line")
+    assert "forces on" not in field(text, "line")
+    peaks = [line for line in text.splitlines() if "peak contact force" in line]
+    assert len(peaks) == 2 and all("(the static 1 N included)" in line for line in peaks)
+
+
 def test_the_pulses_of_a_steel_chain_are_the_solitary_waves(tmp_path):
     """Sensors in a chain of steel beads struck at 0.5 m/s: each records the solitary
     wave, whose peak contact force is 0.63955 in the paper's units (0.640 printed in
