@@ -69,7 +69,7 @@ from chainrun.errors import ChainrunError
 from chainrun.store import RunData, read_run
 
 __all__ = ["Pulse", "Pulses", "WaveSpeed", "contact_places", "first_pulse", "measure_pulses",
-           "measure_sensors", "parabola_peak", "wave_speed"]
+           "measure_sensors", "parabola_peak", "pulsed", "wave_speed"]
 
 _NAN = math.nan
 
@@ -320,6 +320,13 @@ def contact_places(diameter=None, gap=None, wall_gap=(0.0, 0.0)) -> np.ndarray:
     # contact j is half its gap left of ball j + 1's left surface; the right wall's,
     # half its gap right of ball N's right surface
     return np.concatenate([centre - r - 0.5 * g[:-1], [centre[-1] + r[-1] + 0.5 * g[-1]]])
+
+
+def pulsed(run) -> bool:
+    """Whether a run's force sensors saw pulses (``chainrun.store.RunData``): it has
+    sensors, and nothing drives its line (a driven line's sensors see its steady
+    response: ``chainrun.analysis.transmission``)."""
+    return bool(run.sensor_balls.size) and not run.line.is_driven
 
 
 def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) -> Pulses:

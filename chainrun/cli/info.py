@@ -306,11 +306,11 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
 
 def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
     """An output folder of several runs: a line per run (its largest forward velocity
-    in a prefix that suits the column, to the digits that hold: ``_velocity``), and
-    for an ``ensemble`` (one
-    line over random seeds) the mean and sample standard deviation of each summary
-    number over the runs, and of its ``pulses`` (each run's ``measure_pulses``) where
-    the runs have force sensors. Runs that stopped before their terminal state have
+    in a prefix that suits the column, to the digits that hold: ``_velocity``; where
+    the runs have force sensors, their ``pulses``, each run's ``measure_pulses``: the
+    wave's speed and the last sensor's peak contact force), and for an ``ensemble``
+    (one line over random seeds) the mean and sample standard deviation of each
+    summary number over the runs, and of its pulses. Runs that stopped before their terminal state have
     their balls counted, and their velocities and energies given, where they stopped,
     and say so."""
     from chainrun.units import end_phrase, scale_for, scale_for_column
@@ -329,8 +329,11 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     checked = any(s.check is not None for s in summaries)
     if checked:
         head += f" {'hold to 1e-9':>13}"
+    columns = _pulse_columns(pulses, units) if pulses else None
+    if columns:
+        head += "".join(f" {title:>{width}}" for title, width, _ in columns)
     lines = [f"{path}: {len(summaries)} runs", head]
-    for s in summaries:
+    for i, s in enumerate(summaries):
         forward = _velocity(*s.forward, s, speed) if s.forward else "0"
         outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
         share = s.energy.get("dissipated", math.nan)
@@ -338,7 +341,9 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
                      f"{forward:>16}"
                      + (f" {share:>11.2%}" if damped else "")
-                     + (f" {_holding(s):>13}" if checked else ""))
+                     + (f" {_holding(s):>13}" if checked else "")
+                     + ("".join(f" {cells[i]:>{width}}" for _, width, cells in columns)
+                        if columns else ""))
     if not ensemble:
         return "\n".join(lines)
     lines += ["", f"over the {len(summaries)} runs: mean +- sample standard deviation "
@@ -356,6 +361,34 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"
               for label, quantity, x in rows]
     return "\n".join(lines)
+
+
+def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
+    """The folder table's columns of the runs' ``pulses``: the wave's speed (in m/s
+    for a line of spheres, else in balls per unit time) to the digits its uncertainty
+    supports, and the last sensor's peak contact force to five digits; each as
+    (title, width, a cell per run)."""
+    from chainrun.units import format_with_error, scale_for_column
+
+    si = all(p.speed_si is not None for p in pulses)
+    fits = [p.speed_si if si else p.speed for p in pulses]
+    if si:
+        wave = scale_for_column("velocity", units, [f.value for f in fits])
+        title = f"wave speed ({wave.unit})"
+    else:
+        wave = scale_for_column("alpha", "paper")  # (a number: balls per unit time)
+        title = "wave speed (ball/s)" if units == "si" else "wave (balls/time)"
+    speeds = [format_with_error(wave(f.value), wave(f.error))[0] if np.isfinite(f.error)
+              else f"{wave(f.value):.6g}" for f in fits]
+    ball = int(pulses[0].balls[-1])
+    peaks = [float(p.peak_force[-1]) if p.balls.size and int(p.balls[-1]) == ball
+             else math.nan for p in pulses]
+    force = scale_for_column("force", units, peaks)
+    columns = [(title, max(16, len(title)), speeds)]
+    peak_title = f"peak F{ball} ({force.unit})" if force.unit else f"peak F{ball}"
+    columns.append((peak_title, max(14, len(peak_title)),
+                    [f"{force(f):#.5g}" for f in peaks]))
+    return columns
 
 
 def _statistics(x: np.ndarray, quantity: str | None, units: str) -> str:
@@ -384,24 +417,16 @@ def _statistics(x: np.ndarray, quantity: str | None, units: str) -> str:
     return f"{mean} +- {sd}{unit} ({lo} ... {hi}){some}"
 
 
-def _pulsed(run) -> bool:
-    """Whether the run's sensors saw pulses: it has sensors, and nothing drives it."""
-    line = run.line
-    return bool(run.sensor_balls.size) and not (
-        line.drives or any(w is not None and w.motion is not None
-                           for w in (line.left, line.right)))
-
-
 def _sensors(run) -> list[str]:
     """The section of what the run's force sensors recorded: the pulses
     (``measure_pulses``), or for a line driven by a wall's sine its steady response
     (``chainrun.analysis.transmission``); none without sensors, or for a drive the
     transmission does not take."""
-    from chainrun.analysis.pulse import measure_pulses
+    from chainrun.analysis.pulse import measure_pulses, pulsed
 
     if not run.sensor_balls.size:
         return []
-    if _pulsed(run):
+    if pulsed(run):
         chain = run.parameters.get("config_resolved", {}).get("chain", {})
         return _pulse_lines(measure_pulses(run), chain.get("precompression"))
     from chainrun.analysis.transmission import HARMONICS, measure
@@ -500,7 +525,7 @@ def info(paths: tuple[Path, ...]):
       chainrun info results/table1
     """
     from chainrun.analysis.ensemble import is_ensemble
-    from chainrun.analysis.pulse import measure_pulses
+    from chainrun.analysis.pulse import measure_pulses, pulsed
     from chainrun.analysis.summary import summarize
     from chainrun.paths import INDEX_NAME
     from chainrun.store import read_index, read_run
@@ -524,7 +549,7 @@ def info(paths: tuple[Path, ...]):
                     runs = [read_run(path / str(r["file"])) for r in rows]
                     ensemble = is_ensemble(runs)
                     pulses = ([measure_pulses(run) for run in runs]
-                              if ensemble and all(_pulsed(run) for run in runs) else None)
+                              if all(pulsed(run) for run in runs) else None)
                     click.echo(render_folder(path, summaries, ensemble, pulses))
             else:
                 run = read_run(path)

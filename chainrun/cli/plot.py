@@ -36,6 +36,21 @@ def _transmission(folder: Path):
     return measure_sweep(runs)
 
 
+def _pulses(folder: Path):
+    """Each run's pulses (``measure_pulses``) where the runs in ``folder`` sweep one
+    key and their struck lines carry force sensors (an ensemble over seeds is drawn
+    by its statistics), else None."""
+    from chainrun.analysis.ensemble import is_ensemble
+    from chainrun.analysis.pulse import measure_pulses, pulsed
+    from chainrun.store import read_index, read_run
+
+    runs = [read_run(folder / str(row["file"])) for row in read_index(index_file(folder))]
+    keys = {key for run in runs for key in run.parameters.get("overrides", {})}
+    if len(keys) != 1 or is_ensemble(runs) or not all(pulsed(run) for run in runs):
+        return None
+    return [measure_pulses(run) for run in runs]
+
+
 def _draw_run(args):
     from chainrun.plotting import render_run
 
@@ -84,7 +99,7 @@ MAX_PLOT_WORKERS = 8
                    "time), profiles and displacements (along the line at some snapshot "
                    "times), final (final velocity of each ball), energy, sensors (the force "
                    "sensors' traces); for a sweep's folder also sweep-final, sweep-runs, "
-                   "ensemble, transmission (naming only these draws no run's own views; "
+                   "sweep-pulses, ensemble, transmission (naming only these draws no run's own views; "
                    "naming none, the sweep's own are drawn too) [default: every view the "
                    "runs have data for].")
 @click.option("--log", is_flag=True,
@@ -108,10 +123,12 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
     PDF (--what picks them); an output folder of a sweep also gets its final
     velocities against each swept key (sweep-final.png, --balls picks the balls) and
     a panel per run (sweep-runs.png), or for an ensemble over seeds their mean and
-    spread (ensemble.png); a sweep of a wall's drive frequency with force sensors gets
-    its transmission curve against the line's bands instead (transmission.png,
-    `chainrun.transmission`): where a driven run stops, its velocities are a snapshot
-    of its oscillation.
+    spread (ensemble.png); a sweep of one key whose struck lines carry force sensors
+    also gets their pulses' wave speed, peak force and width against it, with the
+    power laws fitted through them (sweep-pulses.png); a sweep of a wall's drive
+    frequency with force sensors gets its transmission curve against the line's bands
+    instead (transmission.png, `chainrun.transmission`): where a driven run stops, its
+    velocities are a snapshot of its oscillation.
 
     Figures go to RESULTS/figures/figNN.png and .pdf, Table 1 to
     RESULTS/tables/table1.md and .csv, and the comparison of every printed number to
@@ -180,6 +197,7 @@ def plot(names: tuple[str, ...], all_: bool, list_: bool, format_: str, results:
                     paths = render_sweep(folder, numbers, out=out, log=log,
                                          ensemble=_ensemble(folder),
                                          transmission=_transmission(folder),
+                                         pulses=_pulses(folder),
                                          views=sweep_views or None)
                     click.echo(f"{folder}: {', '.join(str(p) for p in paths)}")
             except ChainrunError as exc:

@@ -170,21 +170,24 @@ def render_run(path, views=None, *, out=None, log: bool = False) -> list[Path]:
 
 
 #: The views of a sweep's folder as a whole (``render_sweep``).
-SWEEP_VIEWS = ("sweep-final", "sweep-runs", "ensemble", "transmission")
+SWEEP_VIEWS = ("sweep-final", "sweep-runs", "sweep-pulses", "ensemble", "transmission")
 
 
 def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
-                 ensemble=None, transmission=None, views=None) -> list[Path]:
+                 ensemble=None, transmission=None, pulses=None, views=None) -> list[Path]:
     """Draw the sweep in ``folder`` (its index.h5), as PNG and PDF in ``out`` (default
     ``folder/figures``): a panel of final velocities per run (``sweep-runs``), and the
     final velocities of ``balls`` against each swept key (``sweep-final``); or, given
     the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
     differ only in their random seeds), its mean and spread (``ensemble``) instead of
-    the latter. Given the transmission curve of a sweep over a drive's frequency
+    the latter; given the ``pulses`` of a sweep over one key (each run's
+    ``measure_pulses``), their wave speed, peak force and width against that key
+    (``sweep-pulses``). Given the transmission curve of a sweep over a drive's frequency
     (``chainrun.transmission``), that curve against the line's bands
     (``transmission``) alone: the velocities where a driven run stops are a snapshot of
     its oscillation, not a result. ``views`` (names of ``SWEEP_VIEWS``) picks among
     those the sweep has. Returns the files written."""
+    from chainrun.plotting.pulses import draw_sweep_pulses
     from chainrun.plotting.transmission import draw_transmission
     from chainrun.plotting.views import (
         describe,
@@ -200,6 +203,9 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
         has = ["transmission"]
     else:
         has = ["ensemble" if ensemble is not None else "sweep-final", "sweep-runs"]
+        keys = {key for run in runs for key in run.parameters.get("overrides", {})}
+        if pulses is not None and len(keys) == 1:
+            has.append("sweep-pulses")
     wanted = has if views is None else [v for v in views if v in has]
     if views is not None and not wanted:
         raise ChainrunError(f"{folder}: this sweep has no view {', '.join(views)} (it has "
@@ -215,6 +221,11 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
                 figure = draw_sweep(runs, balls)
             elif name == "sweep-runs":
                 figure = draw_sweep_runs(runs, log=log)
+            elif name == "sweep-pulses":
+                (key,) = keys
+                title = "\n".join([f"{runs[0].parameters.get('experiment', '')}: "
+                                   f"{len(runs)} runs", describe(runs[0], keys, width=120)])
+                figure = draw_sweep_pulses(runs, pulses, key, title)
             else:
                 keys = runs[0].parameters.get("overrides", {})
                 title = "\n".join([runs[0].parameters.get("experiment", ""),

@@ -151,6 +151,67 @@ def test_a_sweep_draws_chosen_balls_against_the_swept_key(tmp_path):
         assert f"no run has ball {bad} (N = 5;" in result.stderr
 
 
+def test_a_sweep_of_the_impact_speed_draws_its_pulses_with_their_power_laws(tmp_path):
+    """A Hertz line struck at speeds over two decades: its equations scale, so that
+    the solitary wave's speed goes exactly as v^(1/5), its peak force as v^(6/5) and
+    its width as v^(-1/5) (Nesterenko); the figure's curves are the pulses ``info``
+    gives for each run, and their legends the fitted exponents."""
+    from chainrun.plotting.pulses import power_law
+
+    out = simulate_text(tmp_path, """name = "speeds"
+[chain]
+n = 40
+k = 1
+alpha = 1.5
+[output]
+sensors = [15, 25]
+sensor_dt = 0.005
+[solver]
+t_end = 60.0
+[sweep]
+"chain.speed" = [0.1, 0.3, 1.0, 3.0, 10.0]
+""")
+    result = CliRunner().invoke(main, ["plot", str(out), "--what", "sweep-pulses"])
+    assert result.exit_code == 0, result.output
+    assert (out / "figures" / "sweep-pulses.png").is_file()
+    from chainrun.analysis.pulse import measure_pulses
+    from chainrun.plotting.pulses import draw_sweep_pulses
+    from chainrun.store import read_index
+
+    runs = [read_run(out / row["file"]) for row in read_index(out / "index.h5")]
+    speeds = [run.parameters["overrides"]["chain.speed"] for run in runs]
+    pulses = [measure_pulses(run) for run in runs]
+    with style(colour=True):
+        figure = draw_sweep_pulses(runs, pulses, "chain.speed", "title")
+    order = np.argsort(speeds)
+
+    def drawn(gid):
+        return next(a for ax in figure.axes for a in ax.get_lines() if a.get_gid() == gid)
+
+    force = drawn("pulses/force/25")
+    np.testing.assert_allclose(force.get_xdata(), np.sort(speeds))
+    np.testing.assert_array_equal(force.get_ydata(),
+                                  [pulses[i].peak_force[1] for i in order])
+    assert power_law(force.get_xdata(), force.get_ydata()) == pytest.approx(1.2, abs=1e-4)
+    width = drawn("pulses/time/25")
+    assert power_law(width.get_xdata(), width.get_ydata()) == pytest.approx(-0.2, abs=1e-3)
+    legends = [t.get_text() for ax in figure.axes for t in ax.get_legend().get_texts()]
+    assert "fitted through the sensors (slope 0.200)" in legends
+    assert "ball 25 (slope 1.200)" in legends
+    assert all(ax.get_xscale() == "log" for ax in figure.axes)
+    # and the folder's table gives each run's wave speed and last peak force
+    table = CliRunner().invoke(main, ["info", str(out)]).stdout
+    assert "wave (balls/time)" in table and "peak F25" in table
+
+
+def test_a_power_law_is_fitted_through_its_points():
+    from chainrun.plotting.pulses import power_law
+
+    x = np.array([0.5, 2.0, 7.0])
+    assert power_law(x, 3.0 * x**0.7) == pytest.approx(0.7, abs=1e-12)
+    assert np.isnan(power_law([1.0], [2.0])) and np.isnan(power_law([1.0, 1.0], [2.0, 3.0]))
+
+
 def test_a_sweeps_runs_drawn_on_several_processes_are_the_bytes_of_one(tmp_path,
                                                                       monkeypatch):
     import importlib
