@@ -374,10 +374,24 @@ def _forces(run, figure: Figure, axes) -> None:
     _integer_axis(axes.yaxis)
 
 
+def _last_moving(run) -> int:
+    """The index of the last snapshot worth a profile: the first at or after the
+    terminal state (later ones hold the same velocities, and balls flying apart), or
+    the last."""
+    last = run.times.size - 1
+    if run.terminal:
+        after = np.flatnonzero(np.asarray(run.times) >= run.end_time)
+        if after.size:
+            last = int(after[0])
+    return last
+
+
 def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str,
                     gid: str | None = None) -> None:
+    """Profiles of ``data`` along the line at up to MAX_PROFILES snapshots, spread
+    over the run until its terminal state (``_last_moving``)."""
     _snapshots_needed(run, gid or name, 1)
-    picks = np.unique(np.linspace(0, run.times.size - 1, MAX_PROFILES).round().astype(int))
+    picks = np.unique(np.linspace(0, _last_moving(run), MAX_PROFILES).round().astype(int))
     rows = np.asarray(data[picks])
     label, scaled = axis_label(name, quantity, run.units, rows)
     balls = np.arange(1, run.n + 1)

@@ -72,6 +72,21 @@ def test_final_velocities_and_profiles_are_the_files(wave):
         np.testing.assert_array_equal(a.get_ydata(), raw["v"][int(a.get_gid().split("/")[1])])
 
 
+def test_profiles_are_spread_over_the_run_until_its_terminal_state(tmp_path):
+    """Snapshots long after the terminal state hold the same velocities: the profiles
+    are drawn at snapshots until the first at or after it, the last of them that."""
+    out = simulate_text(tmp_path, 'name = "late"\n[chain]\nn = 10\nk = 1\nalpha = 1.5\n'
+                                  '[output]\ntimes = {start = 0, stop = 100, step = 1}\n')
+    run = read_run(out / "run.h5")
+    assert run.terminal and run.end_time < 30.0  # (10 balls: the wave is out by t ~ 15)
+    with style():
+        profiles = draw_view(run, "profiles")
+    picked = [int(a.get_gid().split("/")[1]) for a in profiles.axes[0].get_lines()
+              if str(a.get_gid()).startswith("velocity/")]
+    first_after = int(np.flatnonzero(run.times >= run.end_time)[0])
+    assert picked[-1] == first_after and len(picked) == 6
+
+
 def test_the_energy_view_shows_energy_conserved(wave):
     path, raw = wave
     with style(colour=True):
