@@ -313,11 +313,31 @@ def _restitution(e, law: str, inside: bool = False) -> str:
     return f"restitution {e if isinstance(e, (int, float)) else 'varied'}{law}"
 
 
+def _run_name(run) -> str:
+    """A run of a sweep by what its keys set: in SI, each value with its unit
+    (``speed 1 m/s`` for the run ``speed=1.0``); else, and for a key whose values have
+    no unit, its run id; "" for a run of no sweep."""
+    run_id = str(run.parameters.get("run_id", ""))
+    overrides = run.parameters.get("overrides", {})
+    if run_id == "run" or not overrides:
+        return "" if run_id == "run" else run_id
+    if run.units != "si":
+        return run_id
+    parts = []
+    for key, value in overrides.items():
+        name = key.rpartition(".")[2]
+        quantity = SWEPT_QUANTITY.get(name)
+        if quantity is None or not isinstance(value, (int, float)):
+            return run_id
+        parts.append(f"{name} {format_value(float(value), quantity, run.units)}")
+    return ", ".join(parts)
+
+
 def _title(run, width: int = 72) -> str:
     """The experiment (and run) name over what the line is, wrapped to ``width``."""
     experiment = run.parameters.get("experiment", "")
-    run_id = run.parameters.get("run_id", "")
-    name = experiment + (f" ({run_id})" if run_id and run_id != "run" else "")
+    run_name = _run_name(run)
+    name = experiment + (f" ({run_name})" if run_name else "")
     return "\n".join([name] * bool(name) + [describe(run, width=width)])
 
 
@@ -622,7 +642,7 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
         axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, linewidth=0.8,
                   gid=f"final_velocity/{run.parameters.get('run_id', i)}")
         axes.axhline(0.0, color="0.6", linewidth=0.5)
-        axes.set_title(str(run.parameters.get("run_id", i)), fontsize="small")
+        axes.set_title(_run_name(run) or str(i), fontsize="small")
         axes.tick_params(labelsize="x-small")
         _integer_axis(axes.xaxis)
     if log:  # (the panels share it: a scale over every run's velocities)

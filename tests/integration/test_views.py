@@ -426,6 +426,22 @@ def test_an_si_run_is_drawn_in_si_with_readable_prefixes(beads):
     assert "300 mm/s" in figures["final"].axes[0].get_title()
 
 
+def test_an_si_sweeps_runs_are_named_by_their_values_with_units(tmp_path):
+    """The run speed=0.05 of a sweep in SI is "speed 50 mm/s" in its figures' titles
+    and in the sweep's panels; a sweep in the paper's units keeps its run ids."""
+    from chainrun.plotting.views import draw_sweep_runs
+
+    out = simulate_text(tmp_path, 'name = "s"\nunits = "si"\n[chain]\nn = 5\nk = 1\n'
+                                  'diameter = 0.008\nmaterial = "steel"\n'
+                                  '[sweep]\n"chain.speed" = [0.05, 1.0]\n')
+    runs = [read_run(out / name) for name in ("speed=0.05.h5", "speed=1.0.h5")]
+    with style():
+        final = draw_view(runs[0], "final")
+        panels = draw_sweep_runs(runs)
+    assert final.axes[0].get_title().startswith("s (speed 50 mm/s)\n")
+    assert [ax.get_title() for ax in panels.axes] == ["speed 50 mm/s", "speed 1 m/s"]
+
+
 def test_a_title_gives_each_wall_its_own_restitution(beads):
     # the balls' restitution comes before the walls, so that it is not read as a wall's
     import copy
