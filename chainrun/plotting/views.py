@@ -341,9 +341,26 @@ def _title(run, width: int = 72) -> str:
     return "\n".join([name] * bool(name) + [describe(run, width=width)])
 
 
+def _on_the_runs_scale(run, quantity: str, values) -> np.ndarray:
+    """``values`` with the run's own scale of a time (its last: end, snapshot or
+    sample) or a velocity (the impact speed), so that every view of a run writes its
+    times, and its velocities, in one prefix (a profile in m/s beside final
+    velocities in mm/s read as two runs)."""
+    values = np.ravel(np.asarray(values, dtype=float))
+    if quantity == "time":
+        ends = [run.end_time, *run.times[-1:], *run.sensor_time[-1:]]
+        return np.concatenate([values, [max(float(t) for t in ends)]])
+    if quantity == "velocity":
+        speed = float(np.max(np.abs(run.line.velocity))) if run.n else 0.0
+        return np.concatenate([values, [speed]]) if speed > 0.0 else values
+    return values
+
+
 def _time_axis(axes, run, times, which: str = "x"):
-    """Label a time axis in the run's units; returns the scaling for the times."""
-    label, scaled = axis_label("time", "time", run.units, times)
+    """Label a time axis in the run's units, in the prefix of the run's last time
+    (``_on_the_runs_scale``); returns the scaling for the times."""
+    label, scaled = axis_label("time", "time", run.units,
+                               _on_the_runs_scale(run, "time", times))
     (axes.set_xlabel if which == "x" else axes.set_ylabel)(label)
     return scaled
 
@@ -353,7 +370,8 @@ def _spacetime(run, figure: Figure, axes) -> None:
     stride = -(-run.n // MAX_IMAGE_BALLS)
     v = np.asarray(run.velocities[:, ::stride])
     balls = np.arange(1, run.n + 1)[::stride]
-    label, speed = axis_label("velocity", "velocity", run.units, v)
+    label, speed = axis_label("velocity", "velocity", run.units,
+                              _on_the_runs_scale(run, "velocity", v))
     time = _time_axis(axes, run, run.times)
     top = float(np.max(np.abs(speed(v)))) or 1.0
     t = time(run.times)
@@ -413,7 +431,8 @@ def _along_the_line(run, figure: Figure, axes, name: str, data, quantity: str,
     _snapshots_needed(run, gid or name, 1)
     picks = np.unique(np.linspace(0, _last_moving(run), MAX_PROFILES).round().astype(int))
     rows = np.asarray(data[picks])
-    label, scaled = axis_label(name, quantity, run.units, rows)
+    label, scaled = axis_label(name, quantity, run.units,
+                               _on_the_runs_scale(run, quantity, rows))
     balls = np.arange(1, run.n + 1)
     for row, i in zip(rows, picks):
         axes.plot(balls, scaled(row), label=f"t = {format_value(run.times[i], 'time', run.units)}",
@@ -463,7 +482,8 @@ def _final_name(runs) -> str:
 
 def _final(run, figure: Figure, axes, log: bool) -> None:
     v = np.asarray(run.final_velocity)
-    label, scaled = axis_label(_final_name([run]), "velocity", run.units, v)
+    label, scaled = axis_label(_final_name([run]), "velocity", run.units,
+                               _on_the_runs_scale(run, "velocity", v))
     axes.plot(np.arange(1, run.n + 1), scaled(v), marker="o", markersize=3,
               gid="final_velocity")
     axes.axhline(0.0, color="0.6", linewidth=0.6)

@@ -4,6 +4,7 @@ back from the figures' artists and compared with the file read by h5py."""
 from __future__ import annotations
 
 import hashlib
+import re
 
 import h5py
 import numpy as np
@@ -440,6 +441,25 @@ def test_an_si_sweeps_runs_are_named_by_their_values_with_units(tmp_path):
         panels = draw_sweep_runs(runs)
     assert final.axes[0].get_title().startswith("s (speed 50 mm/s)\n")
     assert [ax.get_title() for ax in panels.axes] == ["speed 50 mm/s", "speed 1 m/s"]
+
+
+def test_every_view_of_a_run_writes_its_times_and_velocities_in_one_prefix(tmp_path):
+    """Struck at 1 m/s, the last ball leaves at 0.985 m/s, and the sensors stop at
+    0.8 ms while the snapshots go on to 1.6 ms: one run's views all read m/s and ms,
+    the prefixes of its impact speed and its last time."""
+    out = simulate_text(tmp_path, 'name = "p"\nunits = "si"\n[chain]\nn = 20\nk = 1\n'
+                                  'speed = 1.0\ndiameter = 0.008\nmaterial = "steel"\n'
+                                  '[output]\ntimes = {start = 0, stop = 1.6e-3, step = 1e-4}\n'
+                                  'sensors = [5]\nsensor_dt = 1e-6\nsensor_end = 8e-4\n')
+    run = read_run(out / "run.h5")
+    assert 0.9 < run.final_velocity.max() < 1.0
+    with style():
+        labels = {view: [label for ax in draw_view(run, view).axes
+                         for label in (ax.get_xlabel(), ax.get_ylabel()) if label]
+                  for view in ("spacetime", "profiles", "final", "sensors")}
+    units = {re.search(r"\(([^()]*)\)$", label).group(1) for these in labels.values()
+             for label in these if "time" in label or "velocity" in label}
+    assert units == {"ms", "m/s"}, labels
 
 
 def test_a_title_gives_each_wall_its_own_restitution(beads):
