@@ -1,7 +1,8 @@
 """Standard views of any run file, drawn from what the file stores and nothing else.
 
 ``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
-wave front shows), ``forces`` (contact force over contact and time), ``profiles`` and
+wave front shows), ``forces`` (contact force over contact and time, the walls' too),
+``profiles`` and
 ``displacements`` (velocity and displacement along the line at some snapshot times),
 ``final`` (final velocity of every ball), ``energy`` (kinetic, contact and dissipated
 energy over time, and their sum) and ``sensors`` (the force sensors' traces).
@@ -273,9 +274,9 @@ def describe(run, varying=(), width: int | None = None) -> str:
         else:
             sides[side] = " (damped)" if wall.damping > 0.0 else ""
     if len(sides) == 2 and len(set(sides.values())) == 1:
-        parts.append(f"walls left and right{sides['left']}")
+        parts.append(f"walls at both ends{sides['left']}")
     else:
-        parts += [f"wall {side}{how}" for side, how in sides.items()]
+        parts += [f"{side} wall{how}" for side, how in sides.items()]
     if "precompression" in config and "precompression" not in varying:
         parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
     # what drives the line: the experiment, as the strikers are a struck line's
@@ -342,14 +343,14 @@ def _title(run, width: int = 72) -> str:
 
 
 def _on_the_runs_scale(run, quantity: str, values) -> np.ndarray:
-    """``values`` with the run's own scale of a time (its last: end, snapshot or
-    sample) or a velocity (the impact speed), so that every view of a run writes its
-    times, and its velocities, in one prefix (a profile in m/s beside final
-    velocities in mm/s read as two runs)."""
+    """``values`` with the run's own scale of a time (the last the views draw: its
+    last snapshot or sample) or a velocity (the impact speed), so that every view of a
+    run writes its times, and its velocities, in one prefix (a profile in m/s beside
+    final velocities in mm/s read as two runs)."""
     values = np.ravel(np.asarray(values, dtype=float))
     if quantity == "time":
-        ends = [run.end_time, *run.times[-1:], *run.sensor_time[-1:]]
-        return np.concatenate([values, [max(float(t) for t in ends)]])
+        ends = [float(t) for t in (*run.times[-1:], *run.sensor_time[-1:])]
+        return np.concatenate([values, [max(ends)]]) if ends else values
     if quantity == "velocity":
         speed = float(np.max(np.abs(run.line.velocity))) if run.n else 0.0
         return np.concatenate([values, [speed]]) if speed > 0.0 else values
@@ -391,6 +392,16 @@ def _forces(run, figure: Figure, axes) -> None:
     stride = -(-(run.n - 1) // MAX_IMAGE_BALLS)
     force = run.contact_forces(stride)
     contacts = np.arange(1, run.n)[::stride]
+    # a wall's contact as a row of its own beside the balls' (0 the left wall's, N the
+    # right's): the force on a wall is what an experiment measures there
+    left, right = (w is not None for w in run.line.walls)
+    walls = stride == 1 and (left or right)
+    if walls:
+        on_walls = run.wall_forces()
+        if left:
+            force, contacts = np.hstack([on_walls[:, :1], force]), np.r_[0, contacts]
+        if right:
+            force, contacts = np.hstack([force, on_walls[:, 1:]]), np.r_[contacts, run.n]
     # a line under a static load (precompressed, or held by walls) at t = 0: the
     # change of each contact's force from it, on a scale centred at no change, or a
     # wave of a few per cent of the load would be a shade of the load's colour
@@ -408,7 +419,9 @@ def _forces(run, figure: Figure, axes) -> None:
                         extent=(t[0], t[-1], contacts[0] - 0.5, contacts[-1] + stride - 0.5),
                         gid="force")
     figure.colorbar(image, ax=axes, label=label)
-    axes.set_ylabel("contact j (balls j, j+1)" + (f", every {stride}th" if stride > 1 else ""))
+    axes.set_ylabel("contact j (balls j, j+1)" + (f", every {stride}th" if stride > 1 else "")
+                    + (f"; {' and '.join(n for n, w in (('0', left), (str(run.n), right)) if w)}"
+                       f" the wall{'s' * (left and right)}" if walls else ""))
     _integer_axis(axes.yaxis)
 
 

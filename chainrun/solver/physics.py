@@ -69,6 +69,33 @@ def line_contact_forces(x: np.ndarray, line, v: np.ndarray | None = None) -> np.
                        line.damping_exponent)
 
 
+def wall_forces(x: np.ndarray, line, t=None, v: np.ndarray | None = None) -> np.ndarray:
+    """Force of each wall's contact, left and right, at displacements ``x`` of shape
+    (..., N): its law (``contact_law``) of ``w_L - x_1 - g`` and ``x_N - w_R - g``, a
+    moving wall displaced as it is at the times ``t`` (shape (...), which such a line
+    needs), with the velocities ``v`` its damping (against the wall's own velocity);
+    0 where there is no wall. Shape (..., 2)."""
+    x = np.asarray(x, dtype=float)
+    out = np.zeros(x.shape[:-1] + (2,))
+    if any(w is not None and w.motion is not None for w in line.walls) and t is None:
+        raise ValueError("a line whose walls move needs the time of its positions")
+    for side, w in enumerate(line.walls):
+        if w is None:
+            continue
+        u = du = 0.0
+        if w.motion is not None:
+            u, du = w.motion(t), w.motion(t, 1)
+        if side == 0:
+            delta = u - x[..., 0] - w.gap
+            rate = None if v is None else du - np.asarray(v)[..., 0]
+        else:
+            delta = x[..., -1] - u - w.gap
+            rate = None if v is None else np.asarray(v)[..., -1] - du
+        out[..., side] = contact_law(delta, w.stiffness, w.alpha, rate, w.damping,
+                                     w.damping_exponent)
+    return out
+
+
 def contact_forces(x: np.ndarray, alpha, stiffness=1.0, gap=0.0, v=None, damping=0.0,
                    damping_exponent=0.0) -> np.ndarray:
     """``contact_law`` of the contacts between neighbours of ``x`` (shape (..., N)),

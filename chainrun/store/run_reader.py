@@ -219,6 +219,16 @@ class RunData:
         return physics.contact_forces(pairs, **law)[..., 0]
 
 
+    def wall_forces(self) -> np.ndarray:
+        """The walls' contact forces at the snapshots (``physics.wall_forces``: their
+        laws, a moving wall's motion, and on a damped wall's its damping from the
+        velocities), left and right, 0 where there is no wall; shape (T, 2)."""
+        line = self.line
+        damped = any(w is not None and w.damping for w in line.walls)
+        return physics.wall_forces(np.asarray(self.positions), line, np.asarray(self.times),
+                                   np.asarray(self.velocities) if damped else None)
+
+
 def read_run(path) -> RunData:
     """Read a run file (snapshots lazily), after checking its format and version.
 

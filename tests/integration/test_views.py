@@ -305,7 +305,8 @@ def test_a_loaded_lines_force_image_is_the_change_from_its_static_load(tmp_path)
     run = read_run(out / "run.h5")
     with style():
         figure = draw_view(run, "forces")
-    c = run.positions[:, :-1] - run.positions[:, 1:]
+    # the contacts, and the right wall's (unit stiffness, pressed by the last ball)
+    c = np.hstack([run.positions[:, :-1] - run.positions[:, 1:], run.positions[:, -1:]])
     force = np.where(c > 0, np.abs(c) ** 1.5, 0.0)  # Hertz: c_+^(3/2)
     np.testing.assert_allclose(force[0, 1:], 0.2, rtol=1e-12)  # (the striker arrives)
     image = artist(figure, "force")
@@ -462,6 +463,38 @@ def test_every_view_of_a_run_writes_its_times_and_velocities_in_one_prefix(tmp_p
     assert units == {"ms", "m/s"}, labels
 
 
+def test_the_force_view_has_a_walls_contact_the_force_its_sensor_measured(tmp_path):
+    """A right wall's contact is the force view's row N, the force of its law at the
+    stored positions: the force the solver measured on the last ball's wall side at
+    the same times (a sensor, sampled on the snapshots' grid), which peaks well above
+    the solitary wave's as the wave reflects."""
+    from chainrun.solver.physics import wall_forces
+
+    out = simulate_text(tmp_path, 'name = "w"\nunits = "si"\n[chain]\nn = 20\nk = 1\n'
+                                  'speed = 0.1\ndiameter = 0.008\nmaterial = "steel"\n'
+                                  '[walls.right]\n[output]\n'
+                                  'times = {start = 0, stop = 8e-4, step = 2e-6}\n'
+                                  'sensors = [20]\nsensor_dt = 2e-6\nsensor_end = 8e-4\n'
+                                  '[solver]\nt_end = 8e-4\n')
+    run = read_run(out / "run.h5")
+    with style():
+        figure = draw_view(run, "forces")
+    image = artist(figure, "force")
+    rows = np.asarray(image.get_array())
+    assert rows.shape[0] == run.n  # contacts 1..N-1 and the wall's
+    _, _, bottom, top = image.get_extent()
+    assert (bottom, top) == (0.5, run.n + 0.5)
+    wall = wall_forces(np.asarray(run.positions), run.line)[:, 1]
+    np.testing.assert_array_equal(rows[-1], wall)
+    sensed = run.sensor_force[:, 0, 1]  # ball 20, its side away from ball 1: the wall
+    common = min(sensed.size, wall.size)
+    np.testing.assert_allclose(run.sensor_time[:common], run.times[:common], rtol=1e-12)
+    np.testing.assert_allclose(wall[:common], sensed[:common], rtol=1e-9,
+                               atol=1e-9 * sensed.max())
+    assert wall.max() > 1.5 * rows[5].max()  # (the wave reflects off it)
+    assert "20 the wall" in figure.axes[0].get_ylabel()
+
+
 def test_a_title_gives_each_wall_its_own_restitution(beads):
     # the balls' restitution comes before the walls, so that it is not read as a wall's
     import copy
@@ -469,18 +502,18 @@ def test_a_title_gives_each_wall_its_own_restitution(beads):
 
     from chainrun.plotting.views import describe
 
-    assert describe(beads).endswith("restitution 0.8 (Tsuji), wall right")
+    assert describe(beads).endswith("restitution 0.8 (Tsuji), right wall")
     parameters = copy.deepcopy(beads.parameters)
     parameters["config_resolved"]["walls"]["right"].update(restitution=0.5,
                                                           damping_law="tsuji")
     run = SimpleNamespace(line=beads.line, units=beads.units, parameters=parameters)
     assert describe(run).endswith(
-        "restitution 0.8 (Tsuji), wall right (restitution 0.5, Tsuji)")
+        "restitution 0.8 (Tsuji), right wall (restitution 0.5, Tsuji)")
     # swept, a wall's restitution is left out, and the balls' stays
     assert describe(run, ["walls.right.restitution"]).endswith(
-        "restitution 0.8 (Tsuji), wall right")
+        "restitution 0.8 (Tsuji), right wall")
     assert describe(run, ["chain.restitution"]).endswith(
-        "1 striker at 300 mm/s, Hertz contacts, wall right (restitution 0.5, Tsuji)")
+        "1 striker at 300 mm/s, Hertz contacts, right wall (restitution 0.5, Tsuji)")
 
 
 def test_a_wrapped_legend_label_keeps_equations_and_units_whole():
