@@ -2,8 +2,8 @@
 
 ``VIEWS`` names them: ``spacetime`` (velocity over ball and time, an image in which the
 wave front shows), ``forces`` (contact force over contact and time, the walls' too),
-``profiles`` and
-``displacements`` (velocity and displacement along the line at some snapshot times),
+``profiles`` and ``displacements`` (velocity and displacement along the line at some
+snapshot times),
 ``final`` (final velocity of every ball), ``energy`` (kinetic, contact and dissipated
 energy over time, and their sum) and ``sensors`` (the force sensors' traces).
 ``draw_sweep`` draws a sweep's final velocities against its swept keys,
