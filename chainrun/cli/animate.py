@@ -35,7 +35,11 @@ def _ball_range(text: str | None) -> tuple[int, int] | None:
                    "largest 1, 2 or 5 times a power of ten that shows the largest "
                    "compression as at most a quarter of a diameter and keeps the "
                    "magnified motion within the line's length).")
-def animate(run: Path, out: Path, balls: str | None, fps: int, magnify: float | None):
+@click.option("--width", type=click.IntRange(320, 3840), default=800, show_default=True,
+              metavar="PIXELS", help="The frames' width in pixels; their height (a "
+                                     "third of it) and text scale with it.")
+def animate(run: Path, out: Path, balls: str | None, fps: int, magnify: float | None,
+            width: int):
     """Write a movie of the run file RUN: the balls moving along the line, coloured by
     their velocity, one frame per snapshot, with the time in the run's units.
 
@@ -49,11 +53,13 @@ def animate(run: Path, out: Path, balls: str | None, fps: int, magnify: float | 
       chainrun animate results/cradle/run.h5 -o cradle.gif
       chainrun animate results/steel/run.h5 -o steel.gif --magnify 1000
       chainrun animate results/runs/fig05/run.h5 -o wave.mp4 --balls 1:60
+      chainrun animate results/steel/run.h5 -o steel.gif --width 1600
     """
     from chainrun.plotting.animate import animate_run
 
     try:
-        path = animate_run(run, out, balls=_ball_range(balls), fps=fps, magnify=magnify)
+        path = animate_run(run, out, balls=_ball_range(balls), fps=fps, magnify=magnify,
+                           width=width)
     except ChainrunError as exc:
         fail(str(exc))
     click.echo(f"{run}: {path}")

@@ -48,6 +48,8 @@ MAX_BALLS = 300
 #: size of a frame: 800 x 240 pixels
 FIGSIZE = (8.0, 2.4)
 DPI = 100
+#: the frames' width in pixels by default (FIGSIZE at DPI), and the widths allowed
+WIDTH, MIN_WIDTH, MAX_WIDTH = 800, 320, 3840
 #: characters of a line of the title
 TITLE_WIDTH = 110
 #: the colours of velocity, red forward and blue backward
@@ -230,7 +232,7 @@ def _clock(times: np.ndarray, units: str) -> list[str]:
 
 
 def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 20,
-                magnify: float | None = None) -> Path:
+                magnify: float | None = None, width: int = WIDTH) -> Path:
     """Write the movie of the run file ``path`` to ``out`` (``.gif`` or ``.mp4``).
 
     Parameters
@@ -247,6 +249,8 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
     magnify : float, optional
         How much displacements and gaps are magnified (default:
         ``Picture.auto_magnify``, as the module's docstring says).
+    width : int
+        The frames' width in pixels (their height follows, and the text with them).
 
     Returns
     -------
@@ -272,6 +276,8 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
                             "write a .gif instead (no program needed)")
     if magnify is not None and not (math.isfinite(magnify) and magnify > 0.0):
         raise ChainrunError(f"magnify {magnify}: must be a positive number")
+    if not MIN_WIDTH <= width <= MAX_WIDTH:
+        raise ChainrunError(f"width {width}: frames are {MIN_WIDTH} to {MAX_WIDTH} pixels wide")
     run = read_run(path)
     first, last = balls if balls is not None else (1, min(run.n, MAX_BALLS))
     if first > last:
@@ -281,7 +287,8 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
         raise ChainrunError(f"balls {first}:{last}: not within 1:{run.n}")
     frames = _frames(run)
     with style():
-        figure, draw = movie_figure(run, frames, first, last, magnify=magnify)
+        figure, draw = movie_figure(run, frames, first, last, magnify=magnify,
+                                    dpi=width / FIGSIZE[0])
         out.parent.mkdir(parents=True, exist_ok=True)
         write = _write_gif if suffix == ".gif" else _write_mp4
         atomic.write(out, lambda tmp: write(tmp, figure, draw, len(frames), fps),
@@ -289,7 +296,8 @@ def animate_run(path, out, *, balls: tuple[int, int] | None = None, fps: int = 2
     return out
 
 
-def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = None):
+def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = None,
+                 dpi: float = DPI):
     """The movie's figure and a function that draws frame i on it (``draw(i)``).
 
     The figure is laid out with the last frame's time; ``draw`` sets the balls and the
@@ -313,7 +321,7 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
     top = float(np.max(np.abs(v))) or 1.0
     clock = _clock(run.times[frames], units)
 
-    figure = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
+    figure = Figure(figsize=FIGSIZE, dpi=dpi, layout="constrained")
     axes = figure.add_subplot()
     axes.set_aspect("equal", adjustable="datalim")
     big = float(shown.width.max())
@@ -324,7 +332,10 @@ def movie_figure(run, frames, first: int, last: int, *, magnify: float | None = 
     discs.set_array(v[-1])
     discs.set_clim(-top, top)
     axes.add_collection(discs)
-    thick = 0.3 * big
+    # a wall as thick as a third of a ball, and at least 1% of the line, or a long line's
+    # walls are slivers a few pixels wide
+    span = float(centres.max() - centres.min()) + big
+    thick = max(0.3 * big, 0.01 * span)
     for side, face in faces.items():
         corner = face if side == "right" else face - thick
         axes.add_patch(Rectangle((corner, -0.9 * big), thick, 1.8 * big, hatch="////",

@@ -93,6 +93,29 @@ def test_a_gif_has_a_frame_per_snapshot(run_file, tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="needs the ffmpeg program")
+def test_a_movie_is_as_wide_as_asked_and_its_walls_show(tmp_path):
+    """--width sets the frames' pixels (their height a third of it); a wall at the end
+    of a long line is at least 1% of the line thick, not a sliver."""
+    out = simulate_text(tmp_path, 'name = "w"\nunits = "si"\n[chain]\nn = 60\nk = 1\n'
+                                  'speed = 0.1\ndiameter = 0.008\nmaterial = "steel"\n'
+                                  '[walls.right]\n[output]\n'
+                                  'times = {start = 0, stop = 1e-4, step = 5e-5}\n'
+                                  '[solver]\nt_end = 1e-4\n') / "run.h5"
+    movie = tmp_path / "w.gif"
+    result = CliRunner().invoke(main, ["animate", str(out), "-o", str(movie), "--width",
+                                       "1200"])
+    assert result.exit_code == 0, result.output
+    with Image.open(movie) as frames:
+        assert frames.size == (1200, 360)
+    run = read_run(out)
+    with style():
+        figure, _ = movie_figure(run, np.arange(run.times.size), 1, run.n)
+    (wall,) = [a for a in figure.axes[0].patches if a.get_gid() == "wall/right"]
+    assert wall.get_width() >= 0.01 * 60 * 8.0  # mm: 1% of 60 beads of 8 mm
+    result = CliRunner().invoke(main, ["animate", str(out), "-o", str(movie), "--width", "50"])
+    assert result.exit_code == 2 and "--width" in result.stderr
+
+
 def test_an_mp4_is_made_by_ffmpeg(run_file, tmp_path):
     out = tmp_path / "movie.mp4"
     result = CliRunner().invoke(main, ["animate", str(run_file), "-o", str(out)])
