@@ -72,6 +72,11 @@ _LEGEND_INSIDE = 4
 _LEGEND_LABEL = 24
 _LEGEND_BELOW = 6
 _LEGEND_WRAP = 30
+#: below the axes, up to this many entries with a long label stand in one column, the
+#: figure's width, their lines up to _LEGEND_COLUMN_WRAP characters (in two columns a
+#: label of two clauses took three lines)
+_LEGEND_COLUMN = 3
+_LEGEND_COLUMN_WRAP = 72
 #: a legend below the axes takes a column for each label where they are no longer in
 #: all than this many characters, else two
 _LEGEND_ROW = 40
@@ -89,7 +94,7 @@ def _legend(axes) -> None:
     if len(labels) <= _LEGEND_INSIDE and not long:
         axes.legend(fontsize="small").set_gid(_INSIDE)
     elif len(labels) <= _LEGEND_INSIDE or (long and len(labels) <= _LEGEND_BELOW):
-        _legend_below(axes, handles, [_wrap(label) for label in labels])
+        _legend_below(axes, handles, labels)
     else:
         axes.legend(handles, [_wrap(label) for label in labels],
                     fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0),
@@ -97,9 +102,15 @@ def _legend(axes) -> None:
 
 
 def _legend_below(axes, handles, labels) -> None:
-    """The legend below the axes: in one row where its labels are short, else in two
-    columns."""
-    ncols = len(labels) if sum(map(len, labels)) <= _LEGEND_ROW else 2
+    """The legend below the axes: in one row where its labels are short, else in one
+    column of up to _LEGEND_COLUMN entries, or two, its labels wrapped to fit."""
+    if sum(map(len, labels)) <= _LEGEND_ROW:
+        ncols, width = len(labels), _LEGEND_WRAP
+    elif len(labels) <= _LEGEND_COLUMN:
+        ncols, width = 1, _LEGEND_COLUMN_WRAP
+    else:
+        ncols, width = 2, _LEGEND_WRAP
+    labels = [_wrap(label.replace("\n", " "), width) for label in labels]
     axes.legend(handles, labels, fontsize="small", loc="upper center",
                 bbox_to_anchor=(0.5, -0.16), ncols=ncols, borderaxespad=0.0)
 
@@ -123,12 +134,12 @@ def _clear_of_curves(figure, axes) -> None:
         _legend_below(axes, handles, labels)
 
 
-def _wrap(label: str) -> str:
-    """``label`` in lines of ``_LEGEND_WRAP`` characters, never breaking inside an
-    equation (``t = 0``) or between a number and its unit (``2 kHz``)."""
+def _wrap(label: str, width: int = _LEGEND_WRAP) -> str:
+    """``label`` in lines of ``width`` characters, never breaking inside an equation
+    (``t = 0``) or between a number and its unit (``2 kHz``)."""
     glued = re.sub(r"(?<=\S) = (?=\S)", "\u00a0=\u00a0", label)
     glued = re.sub(r"(?<=\d) (?=[^\W\d]{1,3}\b)", "\u00a0", glued)
-    return textwrap.fill(glued, _LEGEND_WRAP).replace("\u00a0", " ")
+    return textwrap.fill(glued, width).replace("\u00a0", " ")
 
 
 def _symlog(axes, values) -> None:
