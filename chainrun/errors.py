@@ -80,7 +80,3 @@ class ConfigError(ChainrunError):
 
 class StoreError(ChainrunError):
     """A run or analysis file that cannot be written or read as chainrun's format."""
-
-
-class SolverError(ChainrunError):
-    """A run that ended in a named failure (see ``chainrun.solver.Outcome``)."""
