@@ -42,8 +42,8 @@ def runs(text: str) -> list:
 def test_a_driven_wall_is_named_with_its_amplitude_frequency_and_ramp():
     (run,) = runs(DRIVEN)
     assert describe(run) == (
-        "N = 30 steel and aluminium spheres of 19 mm, Hertz contacts, walls left and "
-        "right, precompressed 10 N, left wall driven 10 nm at 5.5 kHz (1 ms ramp)")
+        "N = 30 steel and aluminium spheres of 19 mm, Hertz contacts, walls at both "
+        "ends, precompressed 10 N, left wall driven 10 nm at 5.5 kHz (1 ms ramp)")
     # wrapped between its parts, the drive whole on one line
     assert describe(run, width=72).splitlines()[-1] == (
         "left wall driven 10 nm at 5.5 kHz (1 ms ramp)")
