@@ -2,10 +2,9 @@
 
 Read from a run file only (``chainrun.store.RunData``), from its own line (masses,
 contacts, walls, forces and damping; ``RunData.line``), in its own units. A ball
-*rebounds* when its final velocity is negative (beyond the solver's velocity floor,
-below which a velocity is rounding), is *ejected* when it moves forward faster than
-``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed), and is *left
-behind* otherwise. Energies are shares of the impact energy
+*rebounds* when it moves backward, and is *ejected* when it moves forward, faster than
+``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed: the paper's
+threshold of a significant velocity, either way), and is *left behind* otherwise. Energies are shares of the impact energy
 (``chainrun.solver.physics.impact_energy``: K/2 on the paper's line): the kinetic
 energy of the rebounding, ejected and left-behind balls at the end, the energy still
 in the contacts and walls (above the static state a precompressed line starts in,
@@ -116,7 +115,6 @@ class RunSummary:
     reference: tuple[float, str] = (1.0, "the impact speed")
     energy_floor: float = 0.0
     momentum_scale: float = 1.0  # M V of the line's scales, the unit of momentum_error
-    rebound_below: float = 0.0  # a ball rebounds below minus this (the velocity floor)
 
     @property
     def dissipated(self) -> float:
@@ -213,11 +211,11 @@ def summarize(run) -> RunSummary:
     line = run.line
     v = np.asarray(run.final_velocity, dtype=float)
     speed = float(np.max(np.abs(line.velocity))) if line.n else 0.0
-    # a velocity within the solver's floor is rounding (a line left at rest), not a
-    # rebound: the floor is relative to the line's velocity scale
+    # significant either way (a ball drifting back at picometres per second, after a
+    # cradle's impact, is left behind): the paper's 1% of the impact speed
+    significant = SIGNIFICANT * (speed or 1.0)
+    back, ahead = v < -significant, v > significant
     scales = (run.model or {}).get("scales") or {}
-    floor = float(run.parameters.get("velocity_floor", 0.0)) * scales.get("velocity", 1.0)
-    back, ahead = v < -floor, v > SIGNIFICANT * (speed or 1.0)
     behind = ~back & ~ahead
     impact = run.impact_energy
     # on a driven precompressed line, the static load's work as the walls move is given
@@ -271,7 +269,6 @@ def summarize(run) -> RunSummary:
         static_load=load,
         reference=reference_speed(line),
         momentum_scale=scales.get("mass", 1.0) * scales.get("velocity", 1.0),
-        rebound_below=floor,
         dissipating=_most_dissipating(run),
         snapshots=int(run.times.size),
         sensors=int(run.sensor_balls.size),

@@ -90,11 +90,9 @@ def _balls(s, threshold: str) -> list[str]:
     if not s.terminal:
         return [f"balls     at t = {format_value(s.end_time, 'time', s.units, 6)}, before "
                 f"the terminal state: {moving}"]
-    # a velocity within the solver's floor is rounding, not a rebound
-    below = format_value(s.rebound_below, "velocity", s.units, 3)
     return [f"balls     {moving}",
-            f"          {s.rebounding} rebound (v < -{below}, the velocity floor), "
-            f"{s.ejected} ejected (v > 1% of the impact speed, {threshold}), "
+            f"          {s.rebounding} rebound and {s.ejected} ejected (backward and "
+            f"forward faster than 1% of the impact speed, {threshold}), "
             f"{s.left_behind} left behind"]
 
 
