@@ -7,8 +7,9 @@ contacts, walls, forces and damping; ``RunData.line``), in its own units. A ball
 threshold of a significant velocity, either way), and is *left behind* otherwise. Energies are shares of the impact energy
 (``chainrun.solver.physics.impact_energy``: K/2 on the paper's line): the kinetic
 energy of the rebounding, ejected and left-behind balls at the end, the energy still
-in the contacts and walls (above the static state a precompressed line starts in,
-less the work of the external forces), and the energy the damping dissipated. They
+in the contacts and walls (above the static state a precompressed line starts in),
+the energy stored against the external forces (-sum f (x - x(0))), and the energy the
+damping dissipated. They
 add up to 100%, to the run's energy error. On a driven line (a moving wall, forces
 prescribed in time) the shares are of the energy the line took up by the end: its
 impact energy (0 without strikers) plus the drives' work by then
@@ -35,8 +36,10 @@ from chainrun.solver.physics import line_kinetic_energy, line_potential_energy
 
 __all__ = ["RunSummary", "describe_line", "law_name", "summarize"]
 
-#: The energy shares, in the order they are shown.
-SHARES = ("rebound", "ejected", "left behind", "contacts", "dissipated")
+#: The energy shares, in the order they are shown ("forces" on a line with external
+#: forces only: the energy stored against them, -sum f (x - x(0)), the weight's potential
+#: energy in a column under gravity).
+SHARES = ("rebound", "ejected", "left behind", "contacts", "forces", "dissipated")
 
 
 def law_name(alpha: float) -> str:
@@ -59,8 +62,8 @@ class RunSummary:
     None where no ball moves that way. ``events`` counts the logged events by
     ``EventKind`` name. ``impact`` is the impact energy, ``drive_work`` the drives'
     work by the end beyond the static load's (``physics.static_load_work``; 0 without
-    drives), and ``energy`` the shares (``SHARES``) of
-    their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
+    drives), and ``energy`` the shares (``SHARES``; "forces" only on a line with
+    external forces) of their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
     (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
     the run's conditioning check (``chainrun.check.Check``), None for a run without one.
     ``static_load`` is the static load's work taken off the drives' work (0 unless the
@@ -228,7 +231,14 @@ def summarize(run) -> RunSummary:
     amounts = {name: float(line_kinetic_energy(np.where(mask, v, 0.0), line.mass))
                for name, mask in (("rebound", back), ("ejected", ahead),
                                   ("left behind", behind))}
-    amounts |= {"contacts": stored, "dissipated": float(run.dissipated_energy)}
+    if np.any(line.force):
+        # the energy stored against the external forces (a column's weight), apart
+        # from the contacts' and walls' own: -sum f (x - x(0))
+        against = -float(line.force @ (np.asarray(run.final_position) - line.position))
+        amounts |= {"contacts": stored - against, "forces": against}
+    else:
+        amounts |= {"contacts": stored}
+    amounts["dissipated"] = float(run.dissipated_energy)
     energy = {name: (amount / taken if taken > 0.0 else math.nan)
               for name, amount in amounts.items()}
     kinds = np.asarray(run.event_kind)

@@ -18,7 +18,8 @@ _EVENT_NAMES = {"OPEN": "openings", "CLOSE": "closings", "RELEASE": "releases",
 #: A run's outcome in a folder's table, where its value is not a word already.
 _OUTCOME_NAMES = {"stop_time": "at t_end"}
 _SHARE_NAMES = {"rebound": "rebound", "ejected": "ejected", "left behind": "left behind",
-                "contacts": "in contacts and walls", "dissipated": "dissipated"}
+                "contacts": "in contacts and walls", "forces": "against the forces",
+                "dissipated": "dissipated"}
 
 
 def _events(counts: dict[str, int]) -> str:
@@ -246,8 +247,8 @@ _ENSEMBLE = (
     ("largest backward velocity", "velocity",
      lambda s: s.backward[1] if s.backward else 0.0),
     *((f"energy {_SHARE_NAMES[name]} (%)", None,
-       (lambda name: lambda s: 100.0 * s.energy[name])(name))
-      for name in ("rebound", "ejected", "left behind", "contacts", "dissipated")),
+       (lambda name: lambda s: 100.0 * s.energy.get(name, math.nan))(name))
+      for name in ("rebound", "ejected", "left behind", "contacts", "forces", "dissipated")),
 )
 
 
@@ -269,6 +270,8 @@ def _ensemble_rows(when: str) -> tuple:
                             + s.energy["left behind"])),
         (f"energy in contacts and walls {when} (%)", None,
          lambda s: 100.0 * s.energy["contacts"]),
+        (f"energy against the forces {when} (%)", None,
+         lambda s: 100.0 * s.energy.get("forces", math.nan)),
         (f"energy dissipated {when} (%)", None, lambda s: 100.0 * s.energy["dissipated"]),
     )
 
@@ -354,6 +357,9 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
                      "faster than 1% of the impact speed)")
     rows = [(label, quantity, np.array([value(s) for s in summaries], dtype=float))
             for label, quantity, value in (_ensemble_rows(when) if when else _ENSEMBLE)]
+    # (the share against the external forces, on lines that have them only)
+    rows = [row for row in rows if "against the forces" not in row[0]
+            or not np.all(np.isnan(row[2]))]
     rows += _ensemble_pulses(pulses) if pulses else []
     wide = max(34, *(len(label) for label, _, _ in rows))
     lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"

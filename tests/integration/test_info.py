@@ -163,24 +163,30 @@ def _energies_from_the_file(path: Path) -> dict[str, float]:
         v, x = f["results/final_velocity"][()], f["results/final_position"][()]
         dissipated = float(f["results"].attrs["dissipated_energy"])
 
-    def potential(x):
+    def elastic(x):
         parts = [(x[:-1] - x[1:] - gap, kappa, alpha)]
         for side, w in walls.items():
             d = -x[0] - w["gap"] if side == "left" else x[-1] - w["gap"]
             parts.append((np.array([d]), w["stiffness"], w["alpha"]))
-        e = sum(float(np.sum(k * np.clip(d, 0, None) ** (a + 1) / (a + 1)))
-                for d, k, a in parts)
-        return e - float(force @ x)
+        return sum(float(np.sum(k * np.clip(d, 0, None) ** (a + 1) / (a + 1)))
+                   for d, k, a in parts)
+
+    def potential(x):
+        return elastic(x) - float(force @ x)
 
     base = potential(x0) if np.any(x0) else 0.0
     impact = 0.5 * float(m @ v0**2) + potential(x0) - base
+    # stored against the external forces, apart from the contacts' own
+    against = -float(force @ (x - x0))
     ejected = v > 0.01 * np.max(np.abs(v0))
     rebound = v < -0.01 * np.max(np.abs(v0))
     kinetic = 0.5 * m * v**2
     return {"rebound": kinetic[rebound].sum() / impact,
             "ejected": kinetic[ejected].sum() / impact,
             "left behind": kinetic[~rebound & ~ejected].sum() / impact,
-            "in contacts and walls" if walls else "in contacts": (potential(x) - base) / impact,
+            "in contacts and walls" if walls else "in contacts":
+                (potential(x) - base - against) / impact,
+            **({"against the forces": against / impact} if np.any(force) else {}),
             "dissipated": dissipated / impact}
 
 
