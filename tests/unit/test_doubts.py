@@ -3,6 +3,7 @@ energy balance is far off (``chainrun.check.energy_doubt``): warned of, and run.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from chainrun.check import ENERGY_DOUBT, energy_doubt
@@ -80,6 +81,29 @@ def shaken_doubts(tmp_path, amplitude=1e-6, frequency=0.05, sensor_dt=0.5):
     path.write_text(SHAKEN.format(amplitude=amplitude, frequency=frequency,
                                   sensor_dt=sensor_dt))
     return doubts(sweep_specs(load_experiment(path)))
+
+
+def test_an_impact_far_past_hertz_is_named(tmp_path):
+    """Two equal spheres meeting at w press together by c = (5 mu w^2 / (4 kappa))^(2/5),
+    mu = m / 2, kappa = E d^(1/2) / (3 (1 - nu^2)): at 300 m/s (0.3 m/s typed in mm/s)
+    about a tenth of a steel bead's diameter; at 10 m/s well below a hundredth."""
+    young, poisson, rho, d = 207e9, 0.30, 7850.0, 0.02  # materials: steel
+    mass = rho * np.pi * d**3 / 6
+    kappa = young * d**0.5 / (3 * (1 - poisson**2))
+
+    def doubts_at(speed):
+        path = tmp_path / "fast.toml"
+        path.write_text(f'name = "fast"\nunits = "si"\n[chain]\nn = 5\nk = 1\n'
+                        f'speed = {speed}\ndiameter = {d}\nmaterial = "steel"\n')
+        return doubts(sweep_specs(load_experiment(path)))
+
+    (line,) = doubts_at(300.0)
+    depth = (5 * (mass / 2) * 300.0**2 / (4 * kappa)) ** 0.4
+    assert line.startswith(f"chain.speed: balls 1 and 2 meet at 300 m/s and would press "
+                           f"together by {depth * 1e3:.4g} mm, {100 * depth / d:.2g}% of their "
+                           f"diameter")
+    assert line.endswith("speeds in an SI file are in m/s (300 mm/s would be 0.3)")
+    assert doubts_at(10.0) == []
 
 
 def test_a_shaken_line_sampled_well_raises_no_doubt(tmp_path):
