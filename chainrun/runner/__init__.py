@@ -67,6 +67,7 @@ class SweepPlan:
     todo: list[RunSpec] = field(default_factory=list)
     done: dict[str, RunSummary] = field(default_factory=dict)
     conflicts: list[Path] = field(default_factory=list)
+    conflicting: list[RunSpec] = field(default_factory=list)  # the runs of conflicts
 
 
 def sweep_specs(experiment: Experiment, *, check: bool = False,
@@ -106,8 +107,47 @@ def plan_sweep(experiment: Experiment, outdir, *, check: bool = False,
                 continue
         else:
             plan.conflicts.append(path)
+            plan.conflicting.append(spec)
         plan.todo.append(spec)
     return plan
+
+
+def _flat(table, prefix: str = "") -> dict:
+    """A nested config table as {dotted key: value}."""
+    out = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out |= _flat(value, name + ".")
+        else:
+            out[name] = value
+    return out
+
+
+def _difference(path: Path, spec: RunSpec, most: int = 3) -> str:
+    """``: chain.speed is 0.3 in run.h5, 0.31 here``: the keys of the run's config
+    that differ from those its file was made with; "" where the file has none to read
+    (not a chainrun run file)."""
+    import json
+
+    from chainrun.store import _h5, read_run
+
+    try:
+        stored = read_run(path).parameters.get("config_resolved", {})
+    except (StoreError, OSError):
+        return ""
+    old, new = _flat(stored), _flat(json.loads(_h5.to_json(spec.config)))
+    keys = [k for k in sorted(old.keys() | new.keys()) if old.get(k) != new.get(k)]
+    if not keys:
+        return ""
+
+    def value(table, key):
+        return json.dumps(table[key]) if key in table else "not set"
+
+    said = [f"{k} is {value(old, k)} in {path.name}, {value(new, k)} here"
+            for k in keys[:most]]
+    return ": " + "; ".join(said) + (f" (and {len(keys) - most} more)"
+                                     if len(keys) > most else "")
 
 
 def _has_check(summary: RunSummary, spec: RunSpec, check_outdir) -> bool:
@@ -218,9 +258,14 @@ def simulate_experiment(
         more = f" and {len(plan.conflicts) - 4} more" if len(plan.conflicts) > 4 else ""
         raise ChainrunError(
             f"{shown} holds run files of another config or of no chainrun run "
-            f"({names}{more}); use --force to replace them"
+            f"({names}{more}{_difference(plan.conflicts[0], plan.conflicting[0])}); "
+            "use --force to replace them"
         )
     warnings = doubts(plan.todo)
+    figures = outdir / "figures"
+    if plan.conflicts and figures.is_dir():
+        warnings.append(f"{shown / 'figures'} holds the figures of the runs replaced now; "
+                        f"`chainrun plot {shown}` draws them again")
     if scheduler is None and scheduler_file is None and executor is None:
         # refused before anything is made; on a cluster each worker checks its own
         # memory (simulate_run)

@@ -190,11 +190,15 @@ def test_a_changed_config_reruns_only_what_it_changes(tmp_path):
     refused = simulate_cli(config, "-o", out)
     assert refused.exit_code == 2
     assert "k=2.h5" in refused.stderr and "--force" in refused.stderr
+    # what differs, from the file's own config against the run's
+    assert "(k=2.h5: chain.k is 1 in k=2.h5, 2 here)" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 2  # the banner and one error line
     assert stamps(out) == before
 
+    (out / "figures").mkdir()  # drawn from the runs replaced now: said to be stale
     forced = simulate_cli(config, "-o", out, "--force")
     assert forced.exit_code == 0, forced.output
+    assert "figures holds the figures of the runs replaced now" in forced.stderr
     assert "1 computed" in forced.stderr and "2 skipped" in forced.stderr
     after = stamps(out)
     assert after["k=1.h5"] == before["k=1.h5"] and after["k=3.h5"] == before["k=3.h5"]
