@@ -123,7 +123,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     Sweeps resume: a run whose file already holds the same config is skipped, so
     after an interruption the same command computes only what is missing. A file
     of another config stops the command unless --force is given. A failed run does
-    not stop the others; all failures are listed at the end (exit status 1).
+    not stop the others; all failures are listed at the end (exit status 1; 2 for bad
+    input; 130 when interrupted, Ctrl-C).
 
     \b
     Examples:
@@ -176,8 +177,9 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     except ChainrunError as exc:
         fail(str(exc))
     except KeyboardInterrupt:
-        fail("interrupted; finished runs are kept: the same command resumes the sweep",
-             EXIT_INTERRUPTED)
+        fail("interrupted; " + ("finished runs are kept: the same command resumes the sweep"
+                                if total > 1 else "no run file was written: the same command "
+                                "runs it again"), EXIT_INTERRUPTED)
     table = velocity_table(result.summaries)
     if table:
         click.echo("\n" + table)

@@ -86,3 +86,18 @@ def test_random_interruptions_leave_only_whole_files(tmp_path, sig):
     assert proc.returncode == 0, err
     assert _check_final_files(outdir) == 4  # three runs and the index
     assert not list(outdir.glob(".*.partial-*"))
+
+
+def test_an_interrupted_single_run_says_what_is_left(tmp_path):
+    """Ctrl-C on a run of no sweep: exit status 130, and no sweep to resume is promised."""
+    config = tmp_path / "one.toml"
+    # a random line of 1000 balls: tens of seconds of collisions to its terminal state
+    config.write_text('name = "one"\n[chain]\nn = 1000\nk = 1\nalpha = 1.5\n'
+                      'mass = {random = "uniform", low = 1.0, high = 10.0, seed = 1}\n')
+    proc = _start(config, tmp_path / "out")
+    time.sleep(3.0)  # (past start-up: the solver is running)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted; no run file was written: the same command runs it again" in err
+    assert "sweep" not in err.splitlines()[-1]
