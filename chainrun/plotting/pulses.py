@@ -14,6 +14,8 @@ as the impact speed to the 1/5, its peak force to the 6/5. Each artist carries a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import LogFormatter
@@ -31,10 +33,18 @@ _DECADE = 10.0
 class _PlainLog(LogFormatter):
     """A log axis's labels where matplotlib's log formatter puts them (its minor ticks
     too, on an axis of less than a few decades), written as plain numbers: 0.05 and
-    400, not 5e-02 and 4 x 10^2."""
+    400, not 5e-02 and 4 x 10^2; on an axis of more than a decade, the minor ticks at
+    2 and 5 times a power of ten alone (0.03 and 0.04 ran into each other)."""
 
     def __call__(self, x, pos=None):
-        return f"{x:g}" if super().__call__(x, pos) else ""
+        if not super().__call__(x, pos):
+            return ""
+        low, high = sorted(self.axis.get_view_interval())
+        if low > 0 and high > 10.0 * low:
+            mantissa = round(x / 10.0 ** math.floor(math.log10(x) + 1e-9), 6)
+            if mantissa not in (1.0, 2.0, 5.0):
+                return ""
+        return f"{x:g}"
 
 
 def power_law(x, y) -> float:
