@@ -370,7 +370,8 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
 def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
     """The folder table's columns of the runs' ``pulses``: the wave's speed (in m/s
     for a line of spheres, else in balls per unit time) to the digits its uncertainty
-    supports, and the last sensor's peak contact force to five digits; each as
+    supports (six digits with two sensors, whose fit leaves no residual to judge it by),
+    and the last sensor's peak contact force to five digits; each as
     (title, width, a cell per run)."""
     from chainrun.units import format_with_error, scale_for_column
 
@@ -383,13 +384,13 @@ def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
         wave = scale_for_column("alpha", "paper")  # (a number: balls per unit time)
         title = "wave speed (ball/s)" if units == "si" else "wave (balls/time)"
     speeds = [format_with_error(wave(f.value), wave(f.error))[0] if np.isfinite(f.error)
-              else f"{wave(f.value):.6g}" for f in fits]
+              else f"{wave(f.value):#.6g}" for f in fits]
     ball = int(pulses[0].balls[-1])
     peaks = [float(p.peak_force[-1]) if p.balls.size and int(p.balls[-1]) == ball
              else math.nan for p in pulses]
     force = scale_for_column("force", units, peaks)
     columns = [(title, max(16, len(title)), speeds)]
-    peak_title = f"peak F{ball} ({force.unit})" if force.unit else f"peak F{ball}"
+    peak_title = (f"peak force, ball {ball}" + (f" ({force.unit})" if force.unit else ""))
     columns.append((peak_title, max(14, len(peak_title)),
                     [f"{force(f):#.5g}" for f in peaks]))
     return columns

@@ -217,7 +217,7 @@ t_end = 60.0
     assert all(ax.get_xscale() == "log" for ax in figure.axes)
     # and the folder's table gives each run's wave speed and last peak force
     table = CliRunner().invoke(main, ["info", str(out)]).stdout
-    assert "wave (balls/time)" in table and "peak F25" in table
+    assert "wave (balls/time)" in table and "peak force, ball 25" in table
 
 
 def test_a_power_law_is_fitted_through_its_points():
