@@ -147,19 +147,24 @@ class Check:
     separation_velocity_spread: np.ndarray
 
     @classmethod
-    def between(cls, run, check, rtol: float) -> "Check":
-        """The check of ``run`` by ``check``, a run of the same line at ``rtol``.
+    def between(cls, run, check, rtol: float, units: str = "paper") -> "Check":
+        """The check of ``run`` by ``check``, a run of the same line at ``rtol``, its
+        message in the run's ``units`` (``chainrun.units.run_message``).
 
         Parameters
         ----------
         run, check : chainrun.solver.Solution
         rtol : float
+        units : str
         """
+        from chainrun.units import run_message
+
         ok = check.outcome.ok
         n = len(run.final_velocity)
         nan = np.full(n, np.nan)
         return cls(
-            rtol=float(rtol), outcome=check.outcome.value, message=str(check.message),
+            rtol=float(rtol), outcome=check.outcome.value,
+            message=run_message(check, units),
             wall_time=float(check.diagnostics.wall_time),
             final_velocity_spread=(spread(run.final_velocity, check.final_velocity)
                                    if ok else nan),

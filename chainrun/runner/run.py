@@ -155,7 +155,7 @@ def _check(spec: RunSpec, line, sol, check_outdir, hook) -> Check:
                              sensors=checked.sensors, sensor_dt=checked.sensor_dt,
                              sensor_end=checked.sensor_end, **args)
             writer.finish(other)
-    return Check.between(sol, other, checked.rtol)
+    return Check.between(sol, other, checked.rtol, spec.units)
 
 
 def _speed(line) -> dict:

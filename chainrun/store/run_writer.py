@@ -190,6 +190,7 @@ class RunWriter:
         a["k"] = np.int64(spec.k)
         a["alpha"] = np.float64(spec.alpha)
         a["t_end"] = np.float64(np.nan if spec.t_end is None else spec.t_end)
+        a["t_end_unit"] = UNITS[self._units]["time"]
         a["rtol"] = np.float64(spec.rtol)
         a["max_events"] = np.int64(-1 if spec.max_events is None else spec.max_events)
         a["velocity_floor"] = np.float64(velocity_floor)

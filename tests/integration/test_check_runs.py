@@ -178,3 +178,19 @@ def test_the_check_outdir_holds_each_check_runs_own_file(tmp_path):
     ds = chainrun.simulate(config, check=True)
     assert np.array_equal(ds.final_velocity_spread.values,
                           main_run.final_velocity_spread.values)
+
+
+def test_an_si_checks_message_and_stop_time_carry_their_unit(tmp_path):
+    """The check run's message writes its time with a unit as the run's does, and the
+    file's t_end has its unit beside it."""
+    config = tmp_path / "c.toml"
+    config.write_text('name = "c"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.3\n'
+                      'diameter = 0.0254\nmaterial = "steel"\n[solver]\nt_end = 3.0e-3\n')
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(out), "--check"])
+    assert result.exit_code == 0, result.output
+    with h5py.File(out / "run.h5") as f:
+        results, parameters = dict(f["results"].attrs), dict(f["parameters"].attrs)
+    assert results["message"].startswith("stopped at t_end = 3 ms after ")
+    assert results["check_message"].startswith("stopped at t_end = 3 ms after ")
+    assert parameters["t_end"] == 3.0e-3 and parameters["t_end_unit"] == "s"
