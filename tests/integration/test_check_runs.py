@@ -185,12 +185,12 @@ def test_an_si_checks_message_and_stop_time_carry_their_unit(tmp_path):
     file's t_end has its unit beside it."""
     config = tmp_path / "c.toml"
     config.write_text('name = "c"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.3\n'
-                      'diameter = 0.0254\nmaterial = "steel"\n[solver]\nt_end = 3.0e-3\n')
+                      'diameter = 0.0254\nmaterial = "steel"\n[solver]\nt_end = 1.0e-4\n')
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(out), "--check"])
     assert result.exit_code == 0, result.output
     with h5py.File(out / "run.h5") as f:
         results, parameters = dict(f["results"].attrs), dict(f["parameters"].attrs)
-    assert results["message"].startswith("stopped at t_end = 3 ms after ")
-    assert results["check_message"].startswith("stopped at t_end = 3 ms after ")
-    assert parameters["t_end"] == 3.0e-3 and parameters["t_end_unit"] == "s"
+    assert results["message"].startswith("stopped at t_end = 100 µs after ")
+    assert results["check_message"].startswith("stopped at t_end = 100 µs after ")
+    assert parameters["t_end"] == 1.0e-4 and parameters["t_end_unit"] == "s"
