@@ -256,7 +256,10 @@ def validate(data: Any, source: str, to_run: bool = True) -> Experiment:
     """
     if not isinstance(data, Mapping):
         got = "an empty file" if data is None else f"{type(data).__name__} {show_value(data)}"
-        raise ConfigError(source, [f"top level: expected a table of keys, got {got}"])
+        # TOML read as YAML is one string: "name = ... [chain] ..."
+        toml = isinstance(data, str) and "=" in data and not source.endswith(".toml")
+        hint = " (this looks like TOML: name the file .toml)" if toml else ""
+        raise ConfigError(source, [f"top level: expected a table of keys, got {got}{hint}"])
     # data files named by the experiment are relative to its folder
     context = {"base_dir": os.path.dirname(os.path.abspath(source))}
     valid, named, sweep_issues = check_sweep(data.get("sweep"))

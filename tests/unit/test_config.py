@@ -400,6 +400,9 @@ def test_yaml_syntax_error_names_its_line():
         ("- 1\n- 2\n", "top level: expected a table of keys, got list [1, 2]"),
         ("", "top level: expected a table of keys, got an empty file"),
         ("just text\n", "top level: expected a table of keys, got str 'just text'"),
+        # an experiment in TOML read as YAML is one string
+        ('name = "c"\n[chain]\nn = 5\n', "top level: expected a table of keys, got str "
+         "'name = \"c\" [chain] n = 5' (this looks like TOML: name the file .toml)"),
     ],
 )
 def test_top_level_must_be_a_mapping(text, expected):
