@@ -693,6 +693,10 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
         _symlog(first, scaled(np.concatenate([np.asarray(r.final_velocity) for r in runs])))
     figure.supxlabel("ball", fontsize="small")
     figure.supylabel(label, fontsize="small")
+    keys = sorted({key for run in runs for key in _overrides(run)})
+    experiment = runs[0].parameters.get("experiment", "")
+    figure.suptitle("\n".join([f"{experiment}: {len(runs)} runs"]
+                              + [describe(runs[0], keys, 45 * cols)]), fontsize="small")
     return figure
 
 
