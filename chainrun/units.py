@@ -142,6 +142,26 @@ def format_value(value: float, quantity: str, units: str, digits: int = 4,
     return f"{text} {scaled.unit}" if scaled.unit else text
 
 
+def balls_text(values, quantity: str, units: str, digits: int = 4) -> str:
+    """The balls' ``values`` of a ``quantity`` in brief, saying which ball is which:
+    one value (``25.4 mm``); one ball apart (``25.4 mm, ball 1 of 32.002 mm``); a
+    taper (``25.4 mm (ball 1) to 9.585 mm (ball 20)``); else their range (``10 g to
+    30 g``)."""
+    def value(x):
+        return format_value(float(x), quantity, units, digits)
+    a = np.asarray(values, dtype=float)
+    if np.all(a == a[0]):
+        return value(a[0])
+    common, counts = np.unique(a, return_counts=True)
+    if counts.max() == a.size - 1:
+        odd = int(np.flatnonzero(a != common[np.argmax(counts)])[0])
+        return f"{value(common[np.argmax(counts)])}, ball {odd + 1} of {value(a[odd])}"
+    steps = np.diff(a)
+    if np.all(steps >= 0) or np.all(steps <= 0):
+        return f"{value(a[0])} (ball 1) to {value(a[-1])} (ball {a.size})"
+    return f"{value(a.min())} to {value(a.max())}"
+
+
 def run_message(sol, units: str) -> str:
     """A solution's message (``chainrun.solver.Solution``) in the run's units: its
     time with a unit in SI (``terminal state reached at t = 1.19308 ms``), as the

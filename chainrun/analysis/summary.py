@@ -139,7 +139,7 @@ def describe_line(line, units: str, precompression: float | None = None) -> str:
     """The line for a person, in brief: its spheres (material and diameter) or masses,
     contacts, gaps, forces (a ``precompression``'s said as one), damping and walls; ""
     for the paper's line, which N, K and alpha say whole."""
-    from chainrun.units import format_value
+    from chainrun.units import balls_text, format_value
 
     if line.is_paper and units != "si":
         return ""
@@ -153,8 +153,8 @@ def describe_line(line, units: str, precompression: float | None = None) -> str:
         names = [m for m in dict.fromkeys(np.asarray(line.material).tolist()) if m] or [
             "given constants"]
         parts.append(f"{', '.join(n.replace('_', ' ') for n in names)} spheres of "
-                     f"{_span(line.diameter, quantity('diameter'))}")
-    parts.append(f"masses {_span(line.mass, quantity('mass'))}")
+                     f"{balls_text(line.diameter, 'diameter', units, 5)}")
+    parts.append(f"masses {balls_text(line.mass, 'mass', units)}")
     if line.n > 1:
         alpha = _span(line.alpha, lambda x: f"{x:g}")
         unit = (f" N/m^{alpha}" if " " not in alpha else " N/m^alpha") if units == "si" else ""

@@ -31,7 +31,7 @@ from matplotlib.ticker import MaxNLocator
 from chainrun.errors import ChainrunError
 from chainrun.plotting.common import MARKERS
 from chainrun.units import (
-    SWEPT_QUANTITY, axis_label, end_phrase, format_value, law_unit, scale_for,
+    SWEPT_QUANTITY, axis_label, balls_text, end_phrase, format_value, law_unit, scale_for,
 )
 
 __all__ = ["VIEWS", "describe", "draw_ensemble", "draw_sweep", "draw_sweep_runs",
@@ -189,7 +189,7 @@ def _masses(table, mass: np.ndarray, units: str) -> str | None:
                                                     for x in pattern):
         return " / ".join(map(value, pattern)) + (" alternating" if len(pattern) == 2
                                                   else " repeating")
-    return f"{value(mass.min())}-{value(mass.max())}"
+    return balls_text(mass, "mass", units)
 
 
 def _driven(subject: str, drive, quantity: str, units: str, swept=()) -> str:
@@ -235,15 +235,20 @@ def describe(run, varying=(), width: int | None = None) -> str:
     parts = []
     if line.diameter is not None:
         # in the line's order (a steel and glass dimer, not glass and steel)
-        names = [m for m in dict.fromkeys(np.asarray(line.material).tolist()) if m]
+        materials = [str(m) for m in np.asarray(line.material).tolist()]
+        names = [m for m in dict.fromkeys(materials) if m]
+        odd = ""
+        if len(names) == 2 and min(materials.count(n) for n in names) == 1:
+            # one ball of another material (a striker, an impurity): said by its number
+            alone = min(names, key=materials.count)
+            names = [n for n in names if n != alone]
+            odd = f", ball {materials.index(alone) + 1} {alone.replace('_', ' ')}"
         d = np.asarray(line.diameter)
-        size = _drawn(config.get("diameter"), "diameter", units) or (
-            format_value(float(d[0]), "diameter", units) if np.all(d == d[0])
-            else f"{format_value(float(d.min()), 'diameter', units)}"
-                 f"-{format_value(float(d.max()), 'diameter', units)}")
+        size = (_drawn(config.get("diameter"), "diameter", units)
+                or balls_text(d, "diameter", units, 5))
         what = " and ".join(n.replace("_", " ") for n in names) or "given"
         parts.append(("" if "n" in varying else f"N = {line.n} ") + f"{what} spheres"
-                     + ("" if "diameter" in varying else f" of {size}"))
+                     + ("" if "diameter" in varying else f" of {size}") + odd)
     else:
         parts.append("" if "n" in varying else f"N = {line.n}")
         masses = _masses(config.get("mass"), np.asarray(line.mass), units)

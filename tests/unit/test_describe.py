@@ -5,6 +5,8 @@ are the file's values written by hand."""
 from __future__ import annotations
 
 import json
+
+import numpy as np
 from types import SimpleNamespace
 
 from chainrun.config import parse_experiment
@@ -113,10 +115,11 @@ def test_masses_are_given_with_their_unit_and_pattern():
                              "500 mm/s, Hertz contacts")
     (run,) = runs(MASSES.format(mass="{pattern = [0.01, 0.02, 0.03]}", stiffness="5.0e9"))
     assert describe(run).startswith("N = 24, masses 10 g / 20 g / 30 g repeating,")
-    # other unequal masses by their range
+    # a taper from its first ball to its last, which says its way
     (run,) = runs(MASSES.format(mass="{taper = 0.9, start = 0.03}", stiffness="5.0e9"))
     low = 0.03 * 0.9 ** 23  # the 24th ball's: 2.657 g
-    assert describe(run).startswith(f"N = 24, masses {low * 1e3:.4g} g-30 g,")
+    assert describe(run).startswith(f"N = 24, masses 30 g (ball 1) to {low * 1e3:.4g} g "
+                                    f"(ball 24),")
 
 
 def test_random_stiffnesses_carry_their_unit():
@@ -137,3 +140,15 @@ def test_strikers_are_counted_in_words_but_on_the_papers_line():
     (run,) = runs('name = "general"\n[chain]\nn = 5\nk = 1\nalpha = 1.5\n'
                   'mass = {pattern = [1.0, 0.5]}\n')
     assert describe(run) == "N = 5, masses 1 / 0.5 alternating, 1 striker, Hertz contacts"
+
+
+def test_the_balls_values_say_which_ball_is_which():
+    from chainrun.units import balls_text
+
+    d = np.full(5, 0.0254)
+    assert balls_text(d, "diameter", "si") == "25.4 mm"
+    d[0] = 0.032002  # a striker of another size
+    assert balls_text(d, "diameter", "si", 5) == "25.4 mm, ball 1 of 32.002 mm"
+    taper = 0.0254 * 0.9 ** np.arange(5)
+    assert balls_text(taper, "diameter", "si") == "25.4 mm (ball 1) to 16.66 mm (ball 5)"
+    assert balls_text([0.01, 0.03, 0.02], "mass", "si") == "10 g to 30 g"
