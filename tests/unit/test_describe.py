@@ -5,9 +5,9 @@ are the file's values written by hand."""
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
-from types import SimpleNamespace
 
 from chainrun.config import parse_experiment
 from chainrun.plotting.views import describe
