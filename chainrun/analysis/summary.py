@@ -135,10 +135,12 @@ def _span(a: np.ndarray, fmt) -> str:
     return fmt(lo) if lo == hi else f"{fmt(lo)} ... {fmt(hi)}"
 
 
-def describe_line(line, units: str, precompression: float | None = None) -> str:
+def describe_line(line, units: str, precompression: float | None = None,
+                  gravity: float | None = None) -> str:
     """The line for a person, in brief: its spheres (material and diameter) or masses,
-    contacts, gaps, forces (a ``precompression``'s said as one), damping and walls; ""
-    for the paper's line, which N, K and alpha say whole."""
+    contacts, gaps, forces (a ``precompression``'s, or the weights of ``gravity``,
+    said as one), damping and walls; "" for the paper's line, which N, K and alpha say
+    whole."""
     from chainrun.units import balls_text, format_value
 
     if line.is_paper and units != "si":
@@ -162,7 +164,11 @@ def describe_line(line, units: str, precompression: float | None = None) -> str:
                      f"alpha {alpha}")
     if np.any(line.gap):
         parts.append(f"gaps {_span(line.gap, quantity('gap'))}")
-    if precompression and np.count_nonzero(line.force) == 1:
+    if gravity:
+        parts.append(f"under gravity {gravity:g}" + (" m/s^2" if units == "si" else "")
+                     + (" towards ball N, resting on the right wall" if line.right is not None
+                        else " towards ball N"))
+    elif precompression and np.count_nonzero(line.force) == 1:
         ball = int(np.flatnonzero(line.force)[0]) + 1
         parts.append(f"precompressed {format_value(float(precompression), 'force', units)} "
                      f"(a static force on ball {ball}, held by the right wall)")
@@ -243,6 +249,7 @@ def summarize(run) -> RunSummary:
               for name, amount in amounts.items()}
     kinds = np.asarray(run.event_kind)
     d = run.diagnostics
+    chain = run.parameters.get("config_resolved", {}).get("chain", {})
     return RunSummary(
         path=str(run.path),
         creator_version=run.creator_version,
@@ -286,8 +293,7 @@ def summarize(run) -> RunSummary:
         first_time=float(run.times[0]) if run.times.size else math.nan,
         last_time=float(run.times[-1]) if run.times.size else math.nan,
         file_bytes=os.path.getsize(run.path),
-        line=describe_line(line, run.units, (run.parameters.get("config_resolved", {})
-                                             .get("chain", {}).get("precompression"))),
+        line=describe_line(line, run.units, chain.get("precompression"), chain.get("gravity")),
         walls=sum(w is not None for w in line.walls),
         check=run.check,
     )

@@ -97,10 +97,10 @@ def _balls(s, threshold: str) -> list[str]:
             f"{s.left_behind} left behind"]
 
 
-def _pulse_lines(p, static: float | None = None) -> list[str]:
+def _pulse_lines(p, static: str | None = None) -> list[str]:
     """The pulses section: a line per sensor (``chainrun.analysis.pulse.Pulses``), and
-    the wave's speed when two sensors or more saw it; a precompressed line's peaks
-    said to hold its ``static`` force."""
+    the wave's speed when two sensors or more saw it; a loaded line's peaks said to
+    hold its ``static`` load (``1 N`` of a precompression, a column's weight)."""
     from chainrun.units import format_measured, format_value, format_with_error, scale_for
 
     # measured values keep their trailing zeros (31.700 N beside 33.317 N)
@@ -123,8 +123,7 @@ def _pulse_lines(p, static: float | None = None) -> list[str]:
         if not np.isfinite(p.peak_force[i]):
             lines.append(f"ball {ball}: no whole pulse recorded")
             continue
-        held = (f" (the static {format_value(float(static), 'force', p.units)} included)"
-                if static else "")
+        held = f" (the static {static} included)" if static else ""
         lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])}{held} at "
                      f"{t(p.peak_time[i])}, width (FWHM) "
                      f"{crossing(p.width[i], width_error[i])}, arrival "
@@ -428,12 +427,17 @@ def _sensors(run) -> list[str]:
     (``chainrun.analysis.transmission``); none without sensors, or for a drive the
     transmission does not take."""
     from chainrun.analysis.pulse import measure_pulses, pulsed
+    from chainrun.units import format_value
 
     if not run.sensor_balls.size:
         return []
     if pulsed(run):
         chain = run.parameters.get("config_resolved", {}).get("chain", {})
-        return _pulse_lines(measure_pulses(run), chain.get("precompression"))
+        static = (format_value(float(chain["precompression"]), "force", run.units)
+                  if chain.get("precompression") else
+                  "weight on it" if chain.get("gravity") and run.line.right is not None
+                  else None)
+        return _pulse_lines(measure_pulses(run), static)
     from chainrun.analysis.transmission import HARMONICS, measure
 
     # the API's fit (its harmonics), or as many harmonics as the sampling resolves,

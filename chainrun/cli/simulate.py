@@ -84,7 +84,8 @@ def simulate(config: Path, outdir: Path | None, force: bool, check: bool,
     and chain.speed set the first k balls moving (k = 0: a line at rest);
     chain.precompression = F0 holds the resting balls against a right wall, or,
     with both walls and k = 0, loads every contact with F0 between them (the left
-    wall placed so). [walls.left] and [walls.right] take
+    wall placed so); chain.gravity = g weighs every ball towards ball N, a column
+    resting on its right wall. [walls.left] and [walls.right] take
     stiffness, alpha, gap. units = "si" adds per-ball diameter (m) and material
     (steel, stainless_steel, chrome_steel, brass, aluminium, glass, ptfe,
     tungsten_carbide; or young, poisson, density): masses and Hertz contacts follow,

@@ -109,7 +109,9 @@ def line_of(chain: Chain, walls: Walls, units: str) -> Line:
     and a wall with neither stiffness nor material is of the end ball's material. With
     ``precompression`` the resting balls start at equilibrium under that load: pushed
     by a constant force against the right wall, or, between two walls, held by them,
-    the left wall placed where every contact carries the load.
+    the left wall placed where every contact carries the load. With ``gravity`` every
+    ball weighs m g towards ball N, and on a right wall (the floor) the resting balls
+    start at equilibrium under their weights (``chainrun.solver.model.weigh``).
 
     Raises
     ------
@@ -233,8 +235,11 @@ def line_of(chain: Chain, walls: Walls, units: str) -> Line:
                          else np.array([settings.restitution]),
                          settings.damping_exponent),
             None if settings.motion is None else settings.motion.drive)
-    conflict = None  # keys that precompression sets itself
-    if chain.precompression:
+    conflict = None  # keys that precompression and gravity set themselves
+    if chain.gravity and (chain.precompression or (force is not None and np.any(force != 0.0))):
+        conflict = Problem("chain.gravity", "sets the external forces itself (the balls' "
+                           "weights); leave chain.force and chain.precompression out")
+    elif chain.precompression:
         if force is not None and np.any(force != 0.0):
             conflict = Problem("chain.precompression", "sets the external force itself; "
                                "leave chain.force out")
@@ -246,7 +251,8 @@ def line_of(chain: Chain, walls: Walls, units: str) -> Line:
         line = build_line(n, velocity, spheres=spheres,
                           dissipation=_dissipation(chain, damping, restitution, exponent),
                           left=built.get("left"), right=built.get("right"), drives=drives,
-                          precompression=None if conflict else chain.precompression, **kw)
+                          precompression=None if conflict else chain.precompression,
+                          gravity=None if conflict else chain.gravity, **kw)
     except BuildError as exc:
         raise LineError([Problem(_key(key), reason) for key, reason in exc.problems]) from None
     if conflict:  # after the line's own problems, as its precompression would be
@@ -265,7 +271,9 @@ def needs_t_end(chain: Chain, walls: Walls, t_end: float | None,
     if t_end is not None:
         return []
     reasons = []
-    if chain.precompression and walls.left is None:
+    if chain.gravity:
+        reasons.append("chain.gravity keeps pulling")
+    elif chain.precompression and walls.left is None:
         reasons.append("chain.precompression keeps pushing")
     elif isinstance(chain.force, float) and chain.force != 0.0:
         reasons.append("chain.force keeps doing work")
@@ -289,7 +297,8 @@ def needs_t_end(chain: Chain, walls: Walls, t_end: float | None,
         return []
     return [Problem("solver.t_end", f"required: {' and '.join(reasons)}, so the run "
                     "has no terminal state", frozenset({"chain.force",
-                                                        "chain.precompression"}))]
+                                                        "chain.precompression",
+                                                        "chain.gravity"}))]
 
 
 def is_paper(chain: Chain, walls: Walls, units: str) -> bool:

@@ -231,6 +231,7 @@ class Chain(BaseModel):
     gap: Annotated[Any, _values("gap"), _Dump] = None
     force: Annotated[Any, _values("force"), _Dump] = None
     precompression: _OptFloat = Field(None, ge=0)
+    gravity: _OptFloat = Field(None, gt=0)
     damping: Annotated[Any, _values("damping"), _Dump] = None
     damping_exponent: Annotated[Any, _values("damping_exponent"), _Dump] = None
     restitution: Annotated[Any, _values("restitution"), _Dump] = None

@@ -32,6 +32,7 @@ SWEEPABLE_KEYS: dict[str, type] = {
     "chain.force": float,
     "chain.speed": float,
     "chain.precompression": float,
+    "chain.gravity": float,
     "chain.diameter": float,
     "chain.damping": float,
     "chain.damping_exponent": float,

@@ -295,6 +295,8 @@ def describe(run, varying=(), width: int | None = None) -> str:
         parts += [f"{side} wall{how}" for side, how in sides.items()]
     if "precompression" in config and "precompression" not in varying:
         parts.append(f"precompressed {format_value(config['precompression'], 'force', units)}")
+    if "gravity" in config and "gravity" not in varying:
+        parts.append(f"under gravity {config['gravity']:g}" + (" m/s²" if units == "si" else ""))
     # what drives the line: the experiment, as the strikers are a struck line's
     for side, wall in (("left", line.left), ("right", line.right)):
         if wall and wall.motion is not None:

@@ -17,7 +17,7 @@ import numpy as np
 from chainrun.solver import physics
 from chainrun.solver import restitution as collision
 from chainrun.solver.drive import Drive
-from chainrun.solver.model import Line, Wall, precompress
+from chainrun.solver.model import Line, Wall, precompress, weigh
 
 
 @dataclass(frozen=True)
@@ -83,7 +83,7 @@ def build_line(n: int, velocity: np.ndarray, *, mass=None, stiffness=None, alpha
                gap=None, force=None, spheres: Spheres | None = None,
                dissipation: Dissipation = Dissipation(), left: WallSpec | None = None,
                right: WallSpec | None = None, drives=(),
-               precompression: float | None = None) -> Line:
+               precompression: float | None = None, gravity: float | None = None) -> Line:
     """The ``Line`` of ``n`` balls these values describe.
 
     Parameters
@@ -105,6 +105,9 @@ def build_line(n: int, velocity: np.ndarray, *, mass=None, stiffness=None, alpha
     precompression : float, optional
         The load the resting balls start at equilibrium under
         (``chainrun.solver.model.precompress``).
+    gravity : float, optional
+        The acceleration of the balls' weights, towards ball N; on a right wall the
+        resting balls start at equilibrium under them (``chainrun.solver.model.weigh``).
 
     Raises
     ------
@@ -153,6 +156,11 @@ def build_line(n: int, velocity: np.ndarray, *, mass=None, stiffness=None, alpha
             line = precompress(line, precompression)
         except ValueError as exc:
             raise BuildError([("precompression", str(exc))]) from None
+    if gravity:
+        try:
+            line = weigh(line, gravity)
+        except ValueError as exc:
+            raise BuildError([("gravity", str(exc))]) from None
     return line
 
 

@@ -497,3 +497,45 @@ def precompress(line: Line, load: float) -> Line:
     force = np.zeros(line.n)
     force[k] = load
     return replace(line, force=force, position=x)
+
+
+def weigh(line: Line, gravity: float) -> Line:
+    """``line`` under its weight: a force ``m_n g`` on every ball, along the line towards
+    ball N (+x), which keeps acting during the run; with a right wall (the floor), the
+    balls after the strikers start at rest in their static state on it.
+
+    Ball N rests on the floor and every ball on the one below it: contact j (balls j
+    and j+1, j >= K+1) carries the weight of balls K+1..j above it, and the floor that
+    of them all, W = g sum m. The force law gives the positions exactly, from the floor
+    up (as ``precompress`` does for a uniform load):
+
+        x_N = g_R + (W/k_R)^(1/a_R),   x_j = x_{j+1} + g_j + (W_j/k_j)^(1/a_j)
+
+    The strikers (balls 1..K, ``strikers``) keep their velocities and are moved by
+    x_{K+1}, so that they meet ball K+1 as they would without the load (they fall as
+    they come: their weight acts on them too). Without a right wall, or without a ball
+    at rest after the strikers, the balls only get their weights: the line falls.
+
+    The line must have no external force of its own; ``gravity`` > 0 (an acceleration,
+    in the line's units: m/s^2 for a line in SI).
+    """
+    g = float(gravity)
+    if not (math.isfinite(g) and g > 0.0):
+        raise ValueError(f"gravity must be a finite number > 0, got {gravity!r}")
+    if np.any(line.force != 0.0):
+        raise ValueError("gravity sets the external forces (the balls' weights); the line "
+                         "has its own")
+    weight = g * np.asarray(line.mass, dtype=float)
+    k = strikers(line)
+    if line.right is None or k >= line.n or np.any(line.velocity[k:] != 0.0):
+        return replace(line, force=weight)
+    wall = line.right
+    below = np.cumsum(weight[k:])  # the weight each contact below ball K+1.. carries
+    x = np.zeros(line.n)
+    x[-1] = wall.gap + (below[-1] / wall.stiffness) ** (1.0 / wall.alpha)
+    # contact j joins balls j and j+1 (0-based) and carries balls k..j: x_j = x_{j+1} +
+    # its gap and compression, summed from the floor up
+    step = line.gap[k:] + (below[:-1] / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
+    x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    x[:k] = line.position[:k] + x[k]
+    return replace(line, force=weight, position=x)

@@ -365,7 +365,8 @@ SWEEP_VALUES = {
     "chain.alpha": st.floats(1, 1.7976931348623157e308) | st.sampled_from([1, 1 + 2**-52, 1e300]),
     **{key: st.floats(-1e308, 1e308) | st.sampled_from([5e-324, 1e300, 0.0])
        for key in SWEEPABLE_KEYS if key.split(".")[-1] in (
-           "mass", "stiffness", "gap", "force", "speed", "precompression", "diameter", "alpha",
+           "mass", "stiffness", "gap", "force", "speed", "precompression", "gravity",
+           "diameter", "alpha",
            "damping", "damping_exponent", "restitution", "restitution_speed", "amplitude",
            "frequency", "ramp")
        and key != "chain.alpha"},
