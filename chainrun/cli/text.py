@@ -78,7 +78,9 @@ def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
     down, runs across), under a heading with their unit, for short lines: final
     velocities where every run reached its terminal state. Four decimals of the
     table's unit, more for a value below 0.01 of it (three significant digits); a
-    checked run's with no digit beyond its spread (``chainrun.units.supported_format``)."""
+    checked run's to six significant digits, none beyond its spread
+    (``chainrun.units.supported_format``: a velocity of 0.0133 m/s that holds to
+    1e-14 is 0.0133125, not 0.0133)."""
     from chainrun.units import scale_for, supported_format
 
     if (not summaries or any(s.n != summaries[0].n for s in summaries)
@@ -95,9 +97,12 @@ def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
     def cell(s, i: int) -> str:
         spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
         v = float(scaled(s.final_velocity[i]))
-        # four decimals, and more for a small value: at least three significant digits
-        small = v != 0.0 and math.isfinite(v) and abs(v) < 0.01
-        decimals = min(12, 2 - math.floor(math.log10(abs(v)))) if small else 4
+        # four decimals, and more for a small value: at least three significant
+        # digits, six where a check measured how many hold
+        significant = 6 if s.check is not None else 3
+        lead = math.floor(math.log10(abs(v))) if v != 0.0 and math.isfinite(v) else 0
+        decimals = max(4, min(12, significant - 1 - lead)) if s.check is not None else (
+            min(12, 2 - lead) if v != 0.0 and math.isfinite(v) and abs(v) < 0.01 else 4)
         return supported_format(f".{decimals}f", v, float(scaled(spread)))
 
     head = ["n"] + [s.run_id for s in summaries]
