@@ -504,10 +504,27 @@ def _response(a: float, phase: float, x: float, r: float, steady: bool, units: s
             "(not steady)")
 
 
+def _velocities(runs) -> str | None:
+    """Every ball's final velocity (or where the runs stopped), the runs across, as
+    ``chainrun simulate``'s table is for short lines (``velocity_table``)."""
+    from types import SimpleNamespace
+
+    from chainrun.cli.text import velocity_table
+
+    rows = [SimpleNamespace(n=run.n, units=run.units, terminal=run.terminal,
+                            final_velocity=np.asarray(run.final_velocity), check=run.check,
+                            run_id=str(run.parameters.get("run_id", "run")))
+            for run in runs]
+    return velocity_table(rows, max_balls=max(run.n for run in runs))
+
+
 @click.command()
 @click.argument("paths", nargs=-1, required=True,
                 type=click.Path(exists=True, path_type=Path))
-def info(paths: tuple[Path, ...]):
+@click.option("--velocities", is_flag=True,
+              help="Also print every ball's final velocity (a run, or the runs of a "
+                   "folder across), in the run's units, to the digits that hold.")
+def info(paths: tuple[Path, ...], velocities: bool):
     """Summarise the run files PATHS, or every run of output folders PATHS, in each
     run's own units.
 
@@ -532,6 +549,7 @@ def info(paths: tuple[Path, ...]):
     Examples:
       chainrun info results/cradle/run.h5
       chainrun info results/table1
+      chainrun info results/heavy/run.h5 --velocities    # every ball's, any N
     """
     from chainrun.analysis.ensemble import is_ensemble
     from chainrun.analysis.pulse import measure_pulses, pulsed
@@ -550,18 +568,22 @@ def info(paths: tuple[Path, ...]):
                 if not index.is_file():
                     fail(f"{path}: no {INDEX_NAME} (not a chainrun output folder)")
                 rows = read_index(index)
-                summaries = [summarize(read_run(path / str(r["file"]))) for r in rows]
+                runs = [read_run(path / str(r["file"])) for r in rows]
+                summaries = [summarize(run) for run in runs]
                 if len(summaries) == 1:
-                    run = read_run(path / str(rows[0]["file"]))
-                    click.echo(render(summaries[0], _sensors(run)))
+                    click.echo(render(summaries[0], _sensors(runs[0])))
                 else:
-                    runs = [read_run(path / str(r["file"])) for r in rows]
                     ensemble = is_ensemble(runs)
                     pulses = ([measure_pulses(run) for run in runs]
                               if all(pulsed(run) for run in runs) else None)
                     click.echo(render_folder(path, summaries, ensemble, pulses))
             else:
-                run = read_run(path)
-                click.echo(render(summarize(run), _sensors(run)))
+                runs = [read_run(path)]
+                click.echo(render(summarize(runs[0]), _sensors(runs[0])))
+            table = _velocities(runs) if velocities else None
+            if table:
+                click.echo("\n" + table)
+            elif velocities:
+                click.echo("\n(no table: the runs differ in their number of balls or units)")
     except ChainrunError as exc:
         fail(str(exc))

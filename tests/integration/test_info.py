@@ -452,3 +452,20 @@ def test_info_says_when_it_fits_fewer_harmonics_than_transmission(tmp_path):
                                          str(out)]).exit_code == 0
     path = next(p for p in out.glob("*.h5") if p.name != "index.h5")
     assert "(fitted with 2 harmonics, not chainrun.transmission's 3" in info(path).output
+
+
+def test_every_balls_velocity_is_printed_on_request_for_any_n(tmp_path):
+    """A line of 25 balls (longer than simulate's table) gets its table from
+    ``info --velocities``: a row per ball, each the file's final velocity."""
+    out = tmp_path / "long"
+    config = tmp_path / "long.toml"
+    config.write_text('name = "long"\n[chain]\nn = 25\nk = 1\nalpha = 1.5\n')
+    assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+    with h5py.File(out / "run.h5") as f:
+        v = f["results/final_velocity"][()]
+    text = CliRunner().invoke(main, ["info", str(out / "run.h5"), "--velocities"]).stdout
+    table = text.split("final velocities (paper units)\n")[1].splitlines()
+    assert table[0].split() == ["n", "run"]
+    rows = [line.split() for line in table[1:26]]
+    assert [int(r[0]) for r in rows] == list(range(1, 26))
+    np.testing.assert_allclose([float(r[1]) for r in rows], v, atol=5e-5)
