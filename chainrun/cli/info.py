@@ -191,7 +191,8 @@ def render(s, sensors=()) -> str:
         return format_value(x, "time", s.units, 6)
 
     if s.terminal:
-        outcome = f"terminal state at t = {t(s.end_time)}: no collision can happen again"
+        end = format_value(s.end_time, "time", s.units, 6, zeros=s.units == "si")
+        outcome = f"terminal state at t = {end}: no collision can happen again"
     elif s.outcome == "stop_time":
         outcome = f"stopped at t_end = {t(s.end_time)} (not the terminal state)"
     else:
