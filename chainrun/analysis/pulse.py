@@ -148,6 +148,10 @@ class Pulses:
     width_error, arrival_error : ndarray, shape (S,)
         What the sampling leaves uncertain of each width and arrival time (see
         ``Pulse``); None where not measured.
+    on_wall : ndarray of bool, shape (S,)
+        Whether the contact measured is a wall's (an end ball's, towards its wall): the
+        force on the wall as the wave reflects there, which the wave's speed is not
+        fitted through; None where not known.
     peak_mean_force : ndarray, shape (S,)
         The peak of the first pulse of the sensor's mean force (the mean of its two
         contact forces: what a sensor embedded in the ball measures).
@@ -182,6 +186,7 @@ class Pulses:
     backward_speed_si: WaveSpeed | None = None
     width_error: np.ndarray | None = None
     arrival_error: np.ndarray | None = None
+    on_wall: np.ndarray | None = None
 
 
 def parabola_peak(t, y, i: int) -> tuple[float, float]:
@@ -371,12 +376,14 @@ def measure_pulses(run, *, arrival: float = 0.1, min_rise: float | None = None) 
         run.sensor_time, run.sensor_force, run.sensor_balls, units=run.units,
         diameter=model.get("diameter"), gap=model.get("gap"),
         wall_gap=tuple(walls.get(side, {}).get("gap", 0.0) for side in ("left", "right")),
-        arrival=arrival, min_rise=min_rise)
+        arrival=arrival, min_rise=min_rise, n=run.n,
+        walls=tuple(side in walls for side in ("left", "right")))
 
 
 def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, gap=None,
                     wall_gap=(0.0, 0.0), arrival: float = 0.1,
-                    min_rise: float = 1e-9) -> Pulses:
+                    min_rise: float = 1e-9, n: int | None = None,
+                    walls: tuple[bool, bool] = (False, False)) -> Pulses:
     """``measure_pulses`` on the arrays of a run's force sensors.
 
     Parameters
@@ -394,6 +401,11 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
         ``diameter``, no speed in m/s.
     arrival, min_rise : float
         As ``measure_pulses`` takes them (``min_rise`` in force units).
+    n : int, optional
+        The number of balls, and ``walls`` whether the line has a left and a right
+        wall: a sensor measuring its wall's contact (ball 1 towards the left wall,
+        ball N towards the right) sees the wave reflect, not pass; the speed is not
+        fitted through it (``Pulses.on_wall``).
 
     Returns
     -------
@@ -422,11 +434,12 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
 
     peak_time = np.array([p.peak_time for p in chosen])
     where = balls - 1 + side   # each measured contact: j joins balls j and j + 1
+    on_wall = ((where == 0) & walls[0]) | ((n is not None) & (where == (n or 0)) & walls[1])
     places = None if diameter is None else contact_places(diameter, gap, wall_gap)[where]
 
     def speeds(used) -> tuple[WaveSpeed, WaveSpeed | None]:
-        """The fits through the sensors ``used``."""
-        times = np.where(used, peak_time, _NAN)
+        """The fits through the sensors ``used`` (a wall's contact never)."""
+        times = np.where(used & ~on_wall, peak_time, _NAN)
         return (wave_speed(where + 0.5, times),
                 None if places is None else wave_speed(places, times))
 
@@ -447,7 +460,8 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
         speed=speed, speed_si=speed_si, arrival=float(arrival),
         backward_speed=back, backward_speed_si=back_si,
         width_error=np.array([p.width_error for p in chosen]),
-        arrival_error=np.array([p.arrival_error for p in chosen]))
+        arrival_error=np.array([p.arrival_error for p in chosen]),
+        on_wall=on_wall)
 
 
 def _leaving_side(pair: list[Pulse]) -> int:

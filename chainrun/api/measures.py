@@ -205,6 +205,12 @@ def _as_dataset(p):
                                        "description": "the contact measured (a number, "
                                                       "not a quantity): 0 towards ball 1, "
                                                       "1 away from it"})
+    if p.on_wall is not None:
+        data["on_wall"] = ("sensor", p.on_wall, {
+            "long_name": "on a wall",
+            "description": "whether the contact measured is a wall's (the end ball's, "
+                           "towards its wall): the force on the wall as the wave "
+                           "reflects, which the wave speed is not fitted through"})
     per_time = "ball/s" if si else "balls per unit time (paper units)"
     two = p.backward_speed.points > 0
     way = " towards ball N" if two else ""

@@ -124,7 +124,10 @@ def _pulse_lines(p, static: str | None = None) -> list[str]:
             lines.append(f"ball {ball}: no whole pulse recorded")
             continue
         held = f" (the static {static} included)" if static else ""
-        lines.append(f"ball {ball}: peak contact force {f(p.peak_force[i])}{held} at "
+        wall = p.on_wall is not None and bool(p.on_wall[i])
+        what = ("peak force on the wall (where the wave reflects)"
+                if wall else "peak contact force")
+        lines.append(f"ball {ball}: {what} {f(p.peak_force[i])}{held} at "
                      f"{t(p.peak_time[i])}, width (FWHM) "
                      f"{crossing(p.width[i], width_error[i])}, arrival "
                      f"{crossing(p.arrival_time[i], arrival_error[i])}; peak of the mean "
@@ -371,7 +374,8 @@ def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
     """The folder table's columns of the runs' ``pulses``: the wave's speed (in m/s
     for a line of spheres, else in balls per unit time) to the digits its uncertainty
     supports (six digits with two sensors, whose fit leaves no residual to judge it by),
-    and the last sensor's peak contact force to five digits; each as
+    and the peak contact force of the last sensor the wave passes (not one measuring a
+    wall's contact) to five digits; each as
     (title, width, a cell per run)."""
     from chainrun.units import format_with_error, scale_for_column
 
@@ -385,8 +389,11 @@ def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
         title = "wave speed (ball/s)" if units == "si" else "wave (balls/time)"
     speeds = [format_with_error(wave(f.value), wave(f.error))[0] if np.isfinite(f.error)
               else f"{wave(f.value):#.6g}" for f in fits]
-    ball = int(pulses[0].balls[-1])
-    peaks = [float(p.peak_force[-1]) if p.balls.size and int(p.balls[-1]) == ball
+    # the last sensor the wave passes (a wall's contact is where it reflects)
+    passed = [i for i in range(pulses[0].balls.size)
+              if pulses[0].on_wall is None or not pulses[0].on_wall[i]] or [-1]
+    ball = int(pulses[0].balls[passed[-1]])
+    peaks = [float(p.peak_force[list(p.balls).index(ball)]) if ball in list(p.balls)
              else math.nan for p in pulses]
     force = scale_for_column("force", units, peaks)
     columns = [(title, max(16, len(title)), speeds)]

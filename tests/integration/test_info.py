@@ -469,3 +469,27 @@ def test_every_balls_velocity_is_printed_on_request_for_any_n(tmp_path):
     rows = [line.split() for line in table[1:26]]
     assert [int(r[0]) for r in rows] == list(range(1, 26))
     np.testing.assert_allclose([float(r[1]) for r in rows], v, atol=5e-5)
+
+
+def test_a_sensor_on_a_walls_contact_is_the_force_on_the_wall_not_a_point_of_the_wave(
+        tmp_path):
+    """A sensor on the last ball, against a right wall, measures the wall's contact as
+    the wave reflects (about twice the wave's force): the speed is fitted through the
+    other sensors alone, as a run without it gives it, and info says so."""
+    def run(sensors):
+        out = tmp_path / str(len(sensors))
+        config = tmp_path / f"w{len(sensors)}.toml"
+        config.write_text('name = "w"\n[chain]\nn = 30\nk = 1\nalpha = 1.5\n[walls.right]\n'
+                          f'[output]\nsensors = {sensors}\nsensor_dt = 0.01\n'
+                          '[solver]\nt_end = 60.0\n')
+        assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+        return out / "run.h5"
+
+    from chainrun.analysis.pulse import measure_pulses
+
+    with_wall, without = measure_pulses(run([10, 20, 30])), measure_pulses(run([10, 20]))
+    assert list(with_wall.on_wall) == [False, False, True]
+    assert with_wall.speed.value == without.speed.value and with_wall.speed.points == 2
+    assert with_wall.peak_force[2] > 1.5 * with_wall.peak_force[1]
+    text = info(tmp_path / "3" / "run.h5").stdout
+    assert "ball 30: peak force on the wall (where the wave reflects)" in text
