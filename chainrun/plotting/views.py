@@ -526,9 +526,11 @@ def _final(run, figure: Figure, axes, log: bool) -> None:
 
 
 def _energy(run, figure: Figure, axes) -> None:
-    """Kinetic, contact and dissipated energy, the drives' work on a driven line, and
-    the balance, kinetic + contact + dissipated less the drives' work, which stays at
-    the initial energy."""
+    """Kinetic, contact and dissipated energy, on a line with external forces the
+    energy stored against them (-sum f (x - x(0)), a column's weight's potential energy,
+    as ``chainrun info`` shares it) apart from the contacts', the drives' work on a
+    driven line, and the balance, kinetic + contact + dissipated less the drives' work,
+    which stays at the initial energy."""
     _snapshots_needed(run, "energy", 2)
     obs = run.observables
     # measured from the static state a precompressed line starts in: its contacts'
@@ -546,18 +548,22 @@ def _energy(run, figure: Figure, axes) -> None:
         stored = stored - stored[0] - load
         work = work - load
     total = kinetic + stored + dissipated - work
+    forced = bool(np.any(run.line.force))
+    against = (-(np.asarray(run.positions) - run.line.position) @ run.line.force if forced
+               else np.zeros_like(kinetic))
+    stored = stored - against
     label, scaled = axis_label("energy", "energy", run.units,
-                               np.concatenate([kinetic, stored, total, work]))
+                               np.concatenate([kinetic, stored, against, total, work]))
     t = _time_axis(axes, run, run.times)(run.times)
     contacts = "in contacts and walls" if run.line.walls != (None, None) else "in contacts"
     if np.any(run.line.position) and not driven:
         contacts += " (above the static state)"
-    if np.any(run.line.force):
-        contacts += ", less the forces' work"
     if driven:
         contacts += (", about the static state" if np.any(load) else ", since t = 0")
     axes.plot(t, scaled(kinetic), label="kinetic", gid="kinetic_energy")
     axes.plot(t, scaled(stored), label=contacts, gid="potential_energy")
+    if forced:
+        axes.plot(t, scaled(against), label="against the forces", gid="forces_energy")
     if np.any(dissipated):
         axes.plot(t, scaled(dissipated), label="dissipated", gid="dissipated_energy")
     if np.any(work):

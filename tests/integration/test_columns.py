@@ -59,3 +59,30 @@ def test_a_struck_column_shares_its_impact_energy_the_weight_apart(tmp_path):
     assert shown == round(impact * 1e6, 2)
     against = float(re.search(r"against the forces (-?[\d.]+)%", energy).group(1))
     assert against == round(100 * -float(force @ (x - x0)) / impact, 2)
+
+
+def test_the_energy_view_draws_the_weights_potential_energy_apart(tmp_path):
+    """As info shares it: the energy against the weights, -sum f (x - x(0)) at each
+    snapshot, a curve of its own; the contacts' curve the rest of the stored energy."""
+    from chainrun.plotting import style
+    from chainrun.plotting.views import draw_view
+    from chainrun.store import read_run
+
+    out = simulate_text(tmp_path, COLUMN.format(k=1, speed="speed = 0.3")
+                        + "[output]\ntimes = {start = 0, stop = 5e-3, step = 5e-4}\n")
+    with h5py.File(out / "run.h5") as f:
+        force, x0 = f["model/force"][()], f["model/position"][()]
+        x = f["particles/chain/position/value"][:, :, 0]
+        stored = f["observables/potential_energy/value"][()]
+    run = read_run(out / "run.h5")
+    with style():
+        figure = draw_view(run, "energy")
+    lines = {a.get_gid(): a for a in figure.axes[0].get_lines()}
+    factor = {"µJ": 1e6, "mJ": 1e3, "nJ": 1e9}[re.search(r"\((\S+)\)",
+                                                     figure.axes[0].get_ylabel()).group(1)]
+    against = -(x - x0) @ force
+    np.testing.assert_allclose(lines["forces_energy"].get_ydata(), against * factor,
+                               rtol=1e-12, atol=1e-18 * factor)
+    np.testing.assert_allclose(lines["potential_energy"].get_ydata(),
+                               (stored - run.baseline_energy - against) * factor,
+                               rtol=1e-9, atol=1e-12 * factor * abs(stored).max())
