@@ -91,11 +91,14 @@ def test_random_interruptions_leave_only_whole_files(tmp_path, sig):
 def test_an_interrupted_single_run_says_what_is_left(tmp_path):
     """Ctrl-C on a run of no sweep: exit status 130, and no sweep to resume is promised."""
     config = tmp_path / "one.toml"
-    # a random line of 1000 balls: tens of seconds of collisions to its terminal state
+    # the bench's random line of 1000 balls: some 20 s of collisions to its terminal state
     config.write_text('name = "one"\n[chain]\nn = 1000\nk = 1\nalpha = 1.5\n'
-                      'mass = {random = "uniform", low = 1.0, high = 10.0, seed = 1}\n')
+                      'mass = {random = "uniform", low = 1.0, high = 10.0, seed = 1}\n'
+                      'stiffness = {random = "uniform", low = 1.0, high = 10.0, seed = 2}\n')
     proc = _start(config, tmp_path / "out")
-    time.sleep(3.0)  # (past start-up: the solver is running)
+    banner = proc.stderr.readline()  # (said once the experiment is read: the run starts)
+    assert banner.startswith("one: 1 run"), banner
+    time.sleep(2.0)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
