@@ -688,3 +688,13 @@ def test_five_long_legend_entries_go_below_the_axes(tmp_path):
     axes = figure.axes[0].get_window_extent()
     legend = figure.axes[0].get_legend().get_window_extent()
     assert legend.y1 <= axes.y0 and axes.width >= 0.75 * figure.bbox.width
+
+
+def test_a_bending_power_law_says_its_slopes_from_run_to_run():
+    from chainrun.plotting.pulses import _label, local_slopes
+
+    x = np.array([0.1, 1.0, 10.0])
+    y = np.array([1.0, 10.0**0.18, 10.0**0.18 * 10.0**0.2])  # slopes 0.18, then 0.2
+    np.testing.assert_allclose(local_slopes(x, y), [0.18, 0.2], rtol=1e-12)
+    assert _label("wave", x, y, True) == "wave (slope 0.190, 0.180 → 0.200)"
+    assert _label("wave", x, x**0.2, True) == "wave (slope 0.200)"
