@@ -683,19 +683,27 @@ def _swept_axis(key: str, units: str, values) -> tuple[str, object]:
 
 def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
     """A panel per run of a sweep: its final velocities against ball number, titled by
-    its run id, on a grid of at most 5 columns, every panel on one velocity scale."""
+    its run id, on a grid of at most 5 columns, every panel on one velocity scale; where
+    the runs' impact speeds differ tenfold or more (a sweep of the speed), each run's
+    over its own impact speed, or the slow runs' panels would be flat lines."""
     cols = min(5, len(runs))
     rows = -(-len(runs) // cols)
     units = runs[0].units
-    label, scaled = axis_label(_final_name(runs), "velocity", units,
-                               np.concatenate([np.asarray(r.final_velocity) for r in runs]))
+    speeds = np.array([float(np.max(np.abs(r.line.velocity))) if r.n else 0.0 for r in runs])
+    relative = bool(np.all(speeds > 0) and speeds.max() >= 10.0 * speeds.min())
+    finals = [np.asarray(r.final_velocity) / (v if relative else 1.0)
+              for r, v in zip(runs, speeds)]
+    if relative:
+        label, scaled = f"{_final_name(runs)} / impact speed", (lambda a: np.asarray(a))
+    else:
+        label, scaled = axis_label(_final_name(runs), "velocity", units, np.concatenate(finals))
     figure = Figure(figsize=(2.6 * cols, 2.2 * rows + 0.4), layout="constrained")
     first = None
     for i, run in enumerate(runs):
         # one velocity scale for every panel, so that the runs compare at a glance
         axes = figure.add_subplot(rows, cols, i + 1, sharey=first)
         first = first or axes
-        v = scaled(run.final_velocity)
+        v = scaled(finals[i])
         axes.plot(np.arange(1, run.n + 1), v, marker="o", markersize=2, linewidth=0.8,
                   gid=f"final_velocity/{run.parameters.get('run_id', i)}")
         axes.axhline(0.0, color="0.6", linewidth=0.5)
@@ -703,7 +711,7 @@ def draw_sweep_runs(runs, *, log: bool = False) -> Figure:
         axes.tick_params(labelsize="x-small")
         _integer_axis(axes.xaxis)
     if log:  # (the panels share it: a scale over every run's velocities)
-        _symlog(first, scaled(np.concatenate([np.asarray(r.final_velocity) for r in runs])))
+        _symlog(first, scaled(np.concatenate(finals)))
     figure.supxlabel("ball", fontsize="small")
     figure.supylabel(label, fontsize="small")
     keys = sorted({key for run in runs for key in _overrides(run)})

@@ -442,6 +442,12 @@ def test_an_si_sweeps_runs_are_named_by_their_values_with_units(tmp_path):
         panels = draw_sweep_runs(runs)
     assert final.axes[0].get_title().startswith("s (speed 50 mm/s)\n")
     assert [ax.get_title() for ax in panels.axes] == ["speed 50 mm/s", "speed 1 m/s"]
+    # speeds twenty times apart: each run over its own impact speed, or the slower
+    # run's panel would be a flat line on the faster one's scale
+    assert panels.get_supylabel() == "final velocity / impact speed"
+    for ax, run, speed in zip(panels.axes, runs, (0.05, 1.0)):
+        (line,) = [a for a in ax.get_lines() if str(a.get_gid()).startswith("final_velocity/")]
+        np.testing.assert_array_equal(line.get_ydata(), run.final_velocity / speed)
 
 
 def test_every_view_of_a_run_writes_its_times_and_velocities_in_one_prefix(tmp_path):
