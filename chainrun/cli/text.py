@@ -94,7 +94,8 @@ def velocity_table(summaries: list, max_balls: int = 20) -> str | None:
     scaled = scale_for("velocity", summaries[0].units,
                        np.concatenate([s.final_velocity for s in summaries]))
     what = ("final velocities" if all(s.terminal for s in summaries)
-            else "velocities where the runs stopped")
+            else "velocities where the runs stopped" if len(summaries) > 1
+            else "velocities where the run stopped")
 
     def cell(s, i: int) -> str:
         spread = s.check.final_velocity_spread[i] if s.check is not None else np.nan
