@@ -4,20 +4,20 @@ Read from a run file only (``chainrun.store.RunData``), from its own line (masse
 contacts, walls, forces and damping; ``RunData.line``), in its own units. A ball
 *rebounds* when it moves backward, and is *ejected* when it moves forward, faster than
 ``SIGNIFICANT`` (1%) of the impact speed (the fastest initial speed: the paper's
-threshold of a significant velocity, either way), and is *left behind* otherwise. Energies are shares of the impact energy
-(``chainrun.solver.physics.impact_energy``: K/2 on the paper's line): the kinetic
-energy of the rebounding, ejected and left-behind balls at the end, the energy still
-in the contacts and walls (above the static state a precompressed line starts in),
-the energy stored against the external forces (-sum f (x - x(0))), and the energy the
-damping dissipated. They
-add up to 100%, to the run's energy error. On a driven line (a moving wall, forces
-prescribed in time) the shares are of the energy the line took up by the end: its
-impact energy (0 without strikers) plus the drives' work by then
-(``RunData.drive_energy``), which the same shares add up to; a line that took up no
-energy has none. Where a driven line starts precompressed, the static load's work as
-its walls move (``physics.static_load_work``, F0 times the wall's displacement) is
-taken off both the drives' work and the contacts' energy: it swings with the wall's
-phase and is given back, and without it every share lies between 0 and 100%.
+threshold of a significant velocity, either way), and is *left behind* otherwise.
+Energies are shares of the impact energy (``chainrun.solver.physics.impact_energy``: K/2
+on the paper's line): the kinetic energy of the rebounding, ejected and left-behind
+balls at the end, the energy still in the contacts and walls (above the static state a
+precompressed line starts in), the energy stored against the external forces
+(-sum f (x - x(0))), and the energy the damping dissipated. They add up to 100%, to the
+run's energy error. On a driven line (a moving wall, forces prescribed in time) the
+shares are of the energy the line took up by the end: its impact energy (0 without
+strikers) plus the drives' work by then (``RunData.drive_energy``), which the same
+shares add up to; a line that took up no energy has none. Where a driven line starts
+precompressed, the static load's work as its walls move (``physics.static_load_work``,
+F0 times the wall's displacement) is taken off both the drives' work and the contacts'
+energy: it swings with the wall's phase and is given back, and without it every share
+lies between 0 and 100%.
 """
 
 from __future__ import annotations
@@ -57,15 +57,15 @@ def law_name(alpha: float) -> str:
 class RunSummary:
     """The numbers of one run that a person reads first, in the run's ``units``.
 
-    ``forward`` and ``backward`` are (ball number, 1-based; final velocity) of the
-    ball with the largest forward (towards ball N) and backward final velocity, or
-    None where no ball moves that way. ``events`` counts the logged events by
-    ``EventKind`` name. ``impact`` is the impact energy, ``drive_work`` the drives'
-    work by the end beyond the static load's (``physics.static_load_work``; 0 without
-    drives), and ``energy`` the shares (``SHARES``; "forces" only on a line with
-    external forces) of their sum at the end (NaN where it is not > 0). ``dissipating`` is the contact
-    (1-based) that dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is
-    the run's conditioning check (``chainrun.check.Check``), None for a run without one.
+    ``forward`` and ``backward`` are (ball number, 1-based; final velocity) of the ball
+    with the largest forward (towards ball N) and backward final velocity, or None where
+    no ball moves that way. ``events`` counts the logged events by ``EventKind`` name.
+    ``impact`` is the impact energy, ``drive_work`` the drives' work by the end beyond
+    the static load's (``physics.static_load_work``; 0 without drives), and ``energy``
+    the shares (``SHARES``; "forces" only on a line with external forces) of their sum
+    at the end (NaN where it is not > 0). ``dissipating`` is the contact (1-based) that
+    dissipated most, 0 for a wall, -1 for an elastic line. ``check`` is the run's
+    conditioning check (``chainrun.check.Check``), None for a run without one.
     ``static_load`` is the static load's work taken off the drives' work (0 unless the
     line is driven and starts precompressed); ``reference`` the speed the check's
     spreads are measured against, and its name (``chainrun.check.reference_speed``);

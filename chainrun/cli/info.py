@@ -224,7 +224,8 @@ def render(s, sensors=()) -> str:
         f"at most {min(s.max_window, s.n)} balls integrated at once, {s.wall_time:.2f} s",
         *([f"          {s.closed_form} isolated collisions taken whole"]
           if s.closed_form else []),
-        f"accuracy  {momentum_text(s.momentum_error, s.units, s.momentum_scale)}, |dE|/E = {s.energy_error:.1e} "
+        f"accuracy  {momentum_text(s.momentum_error, s.units, s.momentum_scale)}, "
+        f"|dE|/E = {s.energy_error:.1e} "
         f"({rounding_text(s)[2:-1] + '; ' if rounding_text(s) else ''}projection corrected "
         f"{s.energy_correction:.1e} of E); rtol {s.rtol:g}",
         f"check     {_check(s)}",
@@ -309,12 +310,12 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
 
 
 def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
-    """An output folder of several runs: a line per run (its largest forward velocity
-    in a prefix that suits the column, to the digits that hold: ``_velocity``; where
-    the runs have force sensors, their ``pulses``, each run's ``measure_pulses``: the
-    wave's speed and the last sensor's peak contact force), and for an ``ensemble``
-    (one line over random seeds) the mean and sample standard deviation of each
-    summary number over the runs, and of its pulses. Runs that stopped before their terminal state have
+    """An output folder of several runs: a line per run (its largest forward velocity in a
+    prefix that suits the column, to the digits that hold: ``_velocity``; where the runs
+    have force sensors, their ``pulses``, each run's ``measure_pulses``: the wave's
+    speed and the last sensor's peak contact force), and for an ``ensemble`` (one line
+    over random seeds) the mean and sample standard deviation of each summary number
+    over the runs, and of its pulses. Runs that stopped before their terminal state have
     their balls counted, and their velocities and energies given, where they stopped,
     and say so."""
     from chainrun.units import end_phrase, scale_for, scale_for_column

@@ -99,9 +99,9 @@ MAX_PLOT_WORKERS = 8
                    "time), profiles and displacements (along the line at some snapshot "
                    "times), final (final velocity of each ball), energy, sensors (the force "
                    "sensors' traces); for a sweep's folder also sweep-final, sweep-runs, "
-                   "sweep-pulses, ensemble, transmission (naming only these draws no run's own views; "
-                   "naming none, the sweep's own are drawn too) [default: every view the "
-                   "runs have data for].")
+                   "sweep-pulses, ensemble, transmission (naming only these draws no "
+                   "run's own views; naming none, the sweep's own are drawn too) "
+                   "[default: every view the runs have data for].")
 @click.option("--log", is_flag=True,
               help="For a run file or folder: final velocities on a (symmetric) log scale.")
 @click.option("--balls", default="1,-1", show_default=True, metavar="NUMBERS",

@@ -63,7 +63,8 @@ def run_line(run) -> str:
     else:
         how = run.message
     text = (f"{how}, {count(run.events, 'events')}, {count(run.steps, 'steps')}, "
-            f"{momentum_text(run.momentum_error, run.units, run.momentum_scale)}, |dE|/E = {run.energy_error:.1e}"
+            f"{momentum_text(run.momentum_error, run.units, run.momentum_scale)}, "
+            f"|dE|/E = {run.energy_error:.1e}"
             + rounding_text(run) + ", "
             + (f"dissipated {run.dissipated:.1%} of the "
                f"{'energy taken up' if run.driven else 'impact energy'}, "

@@ -3,15 +3,16 @@
 ``draw_sweep_pulses(runs, pulses, ...)`` draws, for the runs of a sweep over one key
 whose lines are struck and carry force sensors, and their pulses (each run's
 ``chainrun.analysis.pulse.measure_pulses``, the measurements ``chainrun info`` and
-``chainrun.pulses`` give), three panels against that key: the wave's speed (in m/s for
-a line of spheres, else in balls per unit time) with its standard uncertainty, and each
-sensor's peak contact force and pulse width (FWHM). Where the key's values are positive and span a factor of 10 or
-more, the axes are logarithmic and each curve's legend gives the exponent of the power
-law fitted through it (least squares on the logarithms), and where the points bend
-the slopes from the first pair of runs to the last (``slope 0.188, 0.172 → 0.197``): a solitary wave's speed goes as
-the impact speed to the 1/5, its peak force to the 6/5, and on a column under its
-weight the speed's slope rises towards 1/5 as the impacts outgrow the static load.
-Each artist carries a ``gid`` naming what it shows.
+``chainrun.pulses`` give), three panels against that key: the wave's speed (in m/s for a
+line of spheres, else in balls per unit time) with its standard uncertainty, and each
+sensor's peak contact force and pulse width (FWHM). Where the key's values are positive
+and span a factor of 10 or more, the axes are logarithmic and each curve's legend gives
+the exponent of the power law fitted through it (least squares on the logarithms), and
+where the points bend the slopes from the first pair of runs to the last (``slope 0.188,
+0.172 → 0.197``): a solitary wave's speed goes as the impact speed to the 1/5, its peak
+force to the 6/5, and on a column under its weight the speed's slope rises towards 1/5
+as the impacts outgrow the static load. Each artist carries a ``gid`` naming what it
+shows.
 """
 
 from __future__ import annotations
