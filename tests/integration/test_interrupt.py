@@ -36,12 +36,19 @@ times = {start = 0, stop = 70000, step = 5000}
 """
 
 
+def _interruptible() -> None:
+    """In the child before it runs: Ctrl-C as a terminal gives it. A test worker
+    (pytest-xdist's) ignores SIGINT, a child inherits that, and Python then installs no
+    KeyboardInterrupt for it: the signal would be ignored, and the test would not test."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(config: Path, outdir: Path) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "chainrun", "simulate", str(config), "-o", str(outdir),
          "--jobs", "1"],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        env={**os.environ, "PYTHONUNBUFFERED": "1"}, preexec_fn=_interruptible,
     )
 
 
