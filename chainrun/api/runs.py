@@ -307,7 +307,7 @@ def open_run(path) -> "xarray.Dataset":  # noqa: F821
               if k not in ("config_resolved", "overrides")}
     scales = run.model["scales"] if run.model else {}
     attrs = {
-        # as the run file has them: no t_end NaN, no event limit -1 (docs/schema.md)
+        # as the run file has them: an unset t_end NaN, no event limit -1 (docs/schema.md)
         **{k: (_UNSET.get(k, "none") if v is None else v) for k, v in params.items()},
         "overrides": json.dumps(run.parameters.get("overrides", {})),
         "outcome": run.outcome, "terminal": int(run.terminal), "end_time": run.end_time,
