@@ -37,18 +37,20 @@ def _transmission(folder: Path):
 
 
 def _pulses(folder: Path):
-    """Each run's pulses (``measure_pulses``) where the runs in ``folder`` sweep one
-    key and their struck lines carry force sensors (an ensemble over seeds is drawn
-    by its statistics), else None."""
+    """The pulses of the runs in ``folder`` against their swept key
+    (``chainrun.analysis.pulse_sweep.PulseSweep``) where they sweep one key and their
+    struck lines carry force sensors (an ensemble over seeds is drawn by its
+    statistics), else None."""
     from chainrun.analysis.ensemble import is_ensemble
     from chainrun.analysis.pulse import measure_pulses, pulsed
+    from chainrun.analysis.pulse_sweep import pulse_sweep
     from chainrun.store import read_index, read_run
 
     runs = [read_run(folder / str(row["file"])) for row in read_index(index_file(folder))]
     keys = {key for run in runs for key in run.parameters.get("overrides", {})}
     if len(keys) != 1 or is_ensemble(runs) or not all(pulsed(run) for run in runs):
         return None
-    return [measure_pulses(run) for run in runs]
+    return pulse_sweep(runs, [measure_pulses(run) for run in runs], keys.pop())
 
 
 def _draw_run(args):

@@ -180,9 +180,9 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
     final velocities of ``balls`` against each swept key (``sweep-final``); or, given
     the statistics of an ensemble (``chainrun.analysis.ensemble.Ensemble``: runs that
     differ only in their random seeds), its mean and spread (``ensemble``) instead of
-    the latter; given the ``pulses`` of a sweep over one key (each run's
-    ``measure_pulses``), their wave speed, peak force and width against that key
-    (``sweep-pulses``). Given the transmission curve of a sweep over a drive's frequency
+    the latter; given the ``pulses`` of a sweep over one key
+    (``chainrun.analysis.pulse_sweep.PulseSweep``), their wave speed, peak force and
+    width against that key (``sweep-pulses``). Given the transmission curve of a sweep over a drive's frequency
     (``chainrun.transmission``), that curve against the line's bands
     (``transmission``) alone: the velocities where a driven run stops are a snapshot of
     its oscillation, not a result. ``views`` (names of ``SWEEP_VIEWS``) picks among
@@ -203,8 +203,7 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
         has = ["transmission"]
     else:
         has = ["ensemble" if ensemble is not None else "sweep-final", "sweep-runs"]
-        keys = {key for run in runs for key in run.parameters.get("overrides", {})}
-        if pulses is not None and len(keys) == 1:
+        if pulses is not None:
             has.append("sweep-pulses")
     wanted = has if views is None else [v for v in views if v in has]
     if views is not None and not wanted:
@@ -222,10 +221,10 @@ def render_sweep(folder, balls=(1, -1), *, out=None, log: bool = False,
             elif name == "sweep-runs":
                 figure = draw_sweep_runs(runs, log=log)
             elif name == "sweep-pulses":
-                (key,) = keys
                 title = "\n".join([f"{runs[0].parameters.get('experiment', '')}: "
-                                   f"{len(runs)} runs", describe(runs[0], keys, width=120)])
-                figure = draw_sweep_pulses(runs, pulses, key, title)
+                                   f"{len(runs)} runs",
+                                   describe(runs[0], [pulses.key], width=120)])
+                figure = draw_sweep_pulses(pulses, title)
             else:
                 keys = runs[0].parameters.get("overrides", {})
                 title = "\n".join([runs[0].parameters.get("experiment", ""),

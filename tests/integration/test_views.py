@@ -172,7 +172,7 @@ def test_a_sweep_of_the_impact_speed_draws_its_pulses_with_their_power_laws(tmp_
     the solitary wave's speed goes exactly as v^(1/5), its peak force as v^(6/5) and
     its width as v^(-1/5) (Nesterenko); the figure's curves are the pulses ``info``
     gives for each run, and their legends the fitted exponents."""
-    from chainrun.plotting.pulses import power_law
+    from chainrun.analysis.pulse_sweep import power_law, pulse_sweep
 
     out = simulate_text(tmp_path, """name = "speeds"
 [chain]
@@ -198,7 +198,7 @@ t_end = 60.0
     speeds = [run.parameters["overrides"]["chain.speed"] for run in runs]
     pulses = [measure_pulses(run) for run in runs]
     with style(colour=True):
-        figure = draw_sweep_pulses(runs, pulses, "chain.speed", "title")
+        figure = draw_sweep_pulses(pulse_sweep(runs, pulses, "chain.speed"), "title")
     order = np.argsort(speeds)
 
     def drawn(gid):
@@ -221,7 +221,7 @@ t_end = 60.0
 
 
 def test_a_power_law_is_fitted_through_its_points():
-    from chainrun.plotting.pulses import power_law
+    from chainrun.analysis.pulse_sweep import power_law
 
     x = np.array([0.5, 2.0, 7.0])
     assert power_law(x, 3.0 * x**0.7) == pytest.approx(0.7, abs=1e-12)
@@ -697,10 +697,11 @@ def test_five_long_legend_entries_go_below_the_axes(tmp_path):
 
 
 def test_a_bending_power_law_says_its_slopes_from_run_to_run():
-    from chainrun.plotting.pulses import _label, local_slopes
+    from chainrun.analysis.pulse_sweep import _curve, local_slopes
+    from chainrun.plotting.pulses import _label
 
     x = np.array([0.1, 1.0, 10.0])
     y = np.array([1.0, 10.0**0.18, 10.0**0.18 * 10.0**0.2])  # slopes 0.18, then 0.2
     np.testing.assert_allclose(local_slopes(x, y), [0.18, 0.2], rtol=1e-12)
-    assert _label("wave", x, y, True) == "wave (slope 0.190, 0.180 → 0.200)"
-    assert _label("wave", x, x**0.2, True) == "wave (slope 0.200)"
+    assert _label(_curve("wave", x, y, True), True) == "wave (slope 0.190, 0.180 → 0.200)"
+    assert _label(_curve("wave", x, x**0.2, True), True) == "wave (slope 0.200)"
