@@ -434,7 +434,9 @@ def measure_sensors(time, force, balls, *, units: str = "paper", diameter=None, 
 
     peak_time = np.array([p.peak_time for p in chosen])
     where = balls - 1 + side   # each measured contact: j joins balls j and j + 1
-    on_wall = ((where == 0) & walls[0]) | ((n is not None) & (where == (n or 0)) & walls[1])
+    on_wall = (where == 0) & walls[0]
+    if n is not None and walls[1]:
+        on_wall |= where == n
     places = None if diameter is None else contact_places(diameter, gap, wall_gap)[where]
 
     def speeds(used) -> tuple[WaveSpeed, WaveSpeed | None]:

@@ -435,6 +435,20 @@ def strikers(line: Line) -> int:
     return line.n if moving.all() else int(np.argmin(moving))
 
 
+def _resting(line: Line, k: int, loads: np.ndarray, wall_load: float) -> np.ndarray:
+    """The displacements of balls k..N-1 (0-based) at rest on the right wall, contact j
+    (balls j and j+1, j >= k) carrying ``loads[j - k]`` and the wall ``wall_load``, by
+    the force law exactly: x_N = g_R + (W/k_R)^(1/a_R), x_j = x_{j+1} + g_j +
+    (F_j/k_j)^(1/a_j), summed from the wall back (the order of a loop from j = N-2 down
+    to k); balls before k at 0."""
+    wall = line.right
+    x = np.zeros(line.n)
+    x[-1] = wall.gap + (wall_load / wall.stiffness) ** (1.0 / wall.alpha)
+    step = line.gap[k:] + (loads / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
+    x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    return x
+
+
 def precompress(line: Line, load: float) -> Line:
     """``line`` at rest in its static state under the load ``load``, pushed at the right wall.
 
@@ -482,13 +496,7 @@ def precompress(line: Line, load: float) -> Line:
     if moving.size:
         raise ValueError(f"precompression needs the balls after the strikers at rest; "
                          f"ball {k + int(moving[0]) + 1} moves")
-    wall = line.right
-    x = np.zeros(line.n)
-    x[-1] = wall.gap + (load / wall.stiffness) ** (1.0 / wall.alpha)
-    # contact j joins balls j and j+1 (0-based): x_j = x_{j+1} + its gap and compression,
-    # summed from the wall back (the order of a loop from j = N-2 down to K)
-    step = line.gap[k:] + (load / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
-    x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    x = _resting(line, k, np.full(line.n - 1 - k, load), load)
     if between:
         left = line.left
         gap = -x[0] - (load / left.stiffness) ** (1.0 / left.alpha)
@@ -529,13 +537,8 @@ def weigh(line: Line, gravity: float) -> Line:
     k = strikers(line)
     if line.right is None or k >= line.n or np.any(line.velocity[k:] != 0.0):
         return replace(line, force=weight)
-    wall = line.right
-    below = np.cumsum(weight[k:])  # the weight each contact below ball K+1.. carries
-    x = np.zeros(line.n)
-    x[-1] = wall.gap + (below[-1] / wall.stiffness) ** (1.0 / wall.alpha)
-    # contact j joins balls j and j+1 (0-based) and carries balls k..j: x_j = x_{j+1} +
-    # its gap and compression, summed from the floor up
-    step = line.gap[k:] + (below[:-1] / line.stiffness[k:]) ** (1.0 / line.alpha[k:])
-    x[k:-1] = np.cumsum(np.concatenate(([x[-1]], step[::-1])))[:0:-1]
+    # contact j (0-based, balls j and j+1) carries balls k..j; the floor all of them
+    above = np.cumsum(weight[k:])
+    x = _resting(line, k, above[:-1], above[-1])
     x[:k] = line.position[:k] + x[k]
     return replace(line, force=weight, position=x)
