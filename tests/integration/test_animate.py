@@ -92,7 +92,6 @@ def test_a_gif_has_a_frame_per_snapshot(run_file, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["movie.gif"]  # no temporary left
 
 
-@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="needs the ffmpeg program")
 def test_a_movie_is_as_wide_as_asked_and_its_walls_show(tmp_path):
     """--width sets the frames' pixels (their height a third of it); a wall at the end
     of a long line is at least 1% of the line thick, not a sliver."""
@@ -116,6 +115,7 @@ def test_a_movie_is_as_wide_as_asked_and_its_walls_show(tmp_path):
     assert result.exit_code == 2 and "--width" in result.stderr
 
 
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="needs the ffmpeg program")
 def test_an_mp4_is_made_by_ffmpeg(run_file, tmp_path):
     out = tmp_path / "movie.mp4"
     result = CliRunner().invoke(main, ["animate", str(run_file), "-o", str(out)])

@@ -272,7 +272,10 @@ def test_scaling_masses_and_stiffnesses(c):
     b = reference_line(scaled(c_mass=c), units=(1, 1, 1))
     np.testing.assert_allclose(b.final_velocity, a.final_velocity, rtol=0,
                                atol=TOL["scaling"])
-    np.testing.assert_allclose(b.event_time, a.event_time, rtol=0, atol=TOL["scaling"])
+    # an event's time is as good relative to it: after a free flight, a position's
+    # rounding over the closing speed
+    np.testing.assert_allclose(b.event_time, a.event_time, rtol=TOL["scaling"],
+                               atol=TOL["scaling"])
 
 
 @pytest.mark.parametrize("s", [0.01, 0.5, 30.0])
