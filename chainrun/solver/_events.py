@@ -28,7 +28,8 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     ACTIVE, C_ALPHA, C_BETA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, C_LOC, DORMANT, EPS,
     EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR,
-    F_HLAST, HI_ROW, I_DAMPED, I_EVTOTAL, I_M, I_MODE, I_NCL, I_NEV, I_TAY, LO_ROW,
+    F_HLAST, F_TDEF, F_TPREV, HI_ROW, I_DAMPED, I_DEFJ, I_EVTOTAL, I_M, I_MODE, I_NCL,
+    I_NEV, I_TAY, LO_ROW,
     MODE_HERTZ, MODE_LINEAR, MODE_MIXED, N_SAMPLES, N_SERIES_SAMPLES, OPEN, PT, W_ALPHA,
     W_BETA, W_ETA, W_HELD, _tw,
 )
@@ -384,13 +385,36 @@ def _stays_positive(c0, c1, w0, w1, g0, g1, h):
     return False
 
 
+@kernel
+def _parts_after(S, j, th):
+    """Whether held contact j, whose compression crosses 0 at th of the last step,
+    stays open to the step's end: below 0 at each of the scan's samples after th (the
+    resolution at which the scan finds crossings) and at the end beyond its rounding.
+    Its balls then part, without a force between them, through the rest of the step."""
+    c1, _w1, s1 = _contact_end(S, j, 1.0)
+    if not c1 < -_rounding(s1):
+        return False
+    for i in range(1, N_SAMPLES):
+        tb = i / N_SAMPLES
+        if tb > th and not _contact_at(S, j, tb)[0] < 0.0:
+            return False
+    return True
+
+
 @kernel(inline="always")
 def _find_event(S):
-    """Scan the contacts touching clusters for the earliest event of the last step."""
+    """Scan the contacts touching clusters for the earliest event of the last step.
+
+    A held contact's opening (its force already 0, and 0 after it) does not end the
+    step where the rest of its cluster goes on: the earliest that stays open to the
+    step's end waits in I_DEFJ (its time in F_TDEF) for ``_settle._post_step``, unless
+    the step ends before it."""
     best = 2.0
     bj = -1
     bk = 0
     blev = 0.0
+    dth = 2.0  # the held contact whose opening waits, and when
+    dj = -1
     ncont = S.cst.shape[0]
     h = S.fs[F_HLAST]
     q = 0.25 * h * h
@@ -442,9 +466,21 @@ def _find_event(S):
                     elif max(cq0, cq1) + q * _curvature_bound(S, j) < 0.0:
                         continue  # stays open: below both of its levels (0 and lvl > 0)
             th, kind, lev = _contact_event(S, j, best)
+            cj = j
+            # (an undamped line's cp has no row C_HELD; in a cluster of two balls the
+            # opening may be the run's last event, the terminal state's instant)
+            if th < best and kind == EV_OPEN and S.ints[I_DAMPED] == 1 and \
+                    S.cp[C_HELD, j] != 0.0 and S.chi[c] - lo >= 2 and \
+                    _parts_after(S, j, th):
+                # (one waits: of two, the later ends the step)
+                if th < dth:
+                    th, dth = dth, th
+                    cj, dj = dj, j
+                if cj < 0:
+                    continue
             if th < best:
                 best = th
-                bj = j
+                bj = cj
                 bk = kind
                 blev = lev
     if S.ints[I_DAMPED] == 1:
@@ -459,6 +495,11 @@ def _find_event(S):
                     bj = S.cb[p]
                     bk = kind
                     blev = 0.0
+    if dth < best:
+        S.ints[I_DEFJ] = dj
+        S.fs[F_TDEF] = S.fs[F_TPREV] + dth * h
+    else:
+        S.ints[I_DEFJ] = -1
     return best, bj, bk, blev
 
 

@@ -118,7 +118,7 @@ def _after_step(S):
         S.ints[I_HAVEOUT] = 0
         return ST_OUTPUT
     if S.ints[I_POST] == 1:
-        if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 4:
+        if S.ev_t.shape[0] - S.ints[I_NEV] < S.ints[I_M] + 5:
             return ST_FLUSH
         S.ints[I_POST] = 0
         if not _post_step(S):

@@ -17,8 +17,8 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     ACTIVE, B_ACC, B_IM, C_ALPHA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, DORMANT, EPS,
     EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR, F_T,
-    HI_ROW, I_DAMPED, I_DIRTY, I_EVJ, I_EVK, I_FORCED, I_JUMP, I_M, I_NCL, I_NEV, I_SEALED,
-    I_TAY, OPEN, W_HELD, _flight, _free_at, _tw,
+    F_TDEF, HI_ROW, I_DAMPED, I_DEFJ, I_DIRTY, I_EVJ, I_EVK, I_FORCED, I_JUMP, I_M, I_NCL,
+    I_NEV, I_SEALED, I_TAY, OPEN, W_HELD, _flight, _free_at, _tw,
 )
 from chainrun.solver._steppers import _ball_now
 
@@ -269,10 +269,24 @@ def _post_step(S):
     """After an accepted step or jump: season contacts, then apply its event or release contacts."""
     if S.ints[I_JUMP] == 0 and S.ints[I_M] > 0:
         _season(S)
+    parted = False
+    jd = S.ints[I_DEFJ]
+    if jd >= 0:
+        # a held contact whose compression crossed 0 inside the step, and stayed below
+        # (_events._find_event): it opens, logged at its crossing, before the step's
+        # own event at the step's end
+        S.ints[I_DEFJ] = -1
+        _sync(S)
+        if S.cst[jd] == ACTIVE and _due(S, jd) == EV_OPEN:
+            if not _deactivate(S, jd, _engage_level(S, jd)):
+                return False
+            _log(S, S.fs[F_TDEF], jd, EV_OPEN)
+            parted = True
     k = S.ints[I_EVK]
     if k != 0:
         S.ints[I_EVK] = 0
-        _sync(S)
+        if not parted:  # (synced then; the compact arrays no longer match the clusters)
+            _sync(S)
         j = S.ints[I_EVJ]
         if not _apply_event(S, j, k):
             return False
@@ -282,7 +296,7 @@ def _post_step(S):
             # would part with no crossing left for a step to find
             if not _apply_event(S, j, EV_OPEN):
                 return False
-    elif S.ints[I_M] > 0:
+    elif S.ints[I_M] > 0 and not parted:  # (parted: _settle, on the clusters now)
         if _dormant_due(S):
             _sync(S)
             S.ints[I_DIRTY] = 1

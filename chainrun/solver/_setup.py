@@ -275,6 +275,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
     ints = np.concatenate([np.zeros(_state.I_NINT, np.int64), P.dv.reshape(-1),
                            dcur.reshape(-1), P.pc_q.reshape(-1)]).astype(np.int64)
     ints[_state.I_NDRIVE] = nd
+    ints[_state.I_DEFJ] = -1
     ints[_state.I_DCUR] = _state.I_NINT + _state.DV_ROW * nd
     ints[_state.I_PCQ] = ints[_state.I_DCUR] + 2 * nd
     ints[_state.I_PCT] = _state.F_NFLOAT + 2 * nd

@@ -132,13 +132,13 @@ YIELD_STEPS = 20000
 # float scalars
 F_T, F_H, F_TPREV, F_HLAST, F_TOUT, F_TEND, F_TOL, F_FLOOR, F_ALPHA, \
     F_EPROJ, F_TSAME, F_QX1, F_QX2, F_QV1, F_QV2, F_DISS, F_DOUT, F_JL, F_JR, F_JSL, \
-    F_JSR, F_TTASK, F_HCAP, F_WORK, F_WSTEP, F_WOUT, F_NFLOAT = range(27)
+    F_JSR, F_TTASK, F_HCAP, F_WORK, F_WSTEP, F_WOUT, F_TDEF, F_NFLOAT = range(28)
 # int scalars
 I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREED, \
     I_MODE, I_MAXWIN, I_POST, I_EVJ, I_EVK, I_NEED, I_HAVEOUT, I_MAXEV, I_JUMP, \
     I_NSAME, I_DSTAMP, I_TAY, I_UNIT, I_FORCED, I_DAMPED, I_LWALL, I_RWALL, I_LWL, I_RWL, \
     I_TASK, I_XEND, I_PAIRS, I_NSEAL, I_SEALED, I_DRIVEN, I_NDRIVE, I_DCUR, I_PCQ, I_PCT, \
-    I_DQ, I_DT, I_NINT = range(42)
+    I_DQ, I_DT, I_DEFJ, I_NINT = range(43)
 
 # F_JL, F_JR: the impulse the left and right walls gave so far (F_JSL, F_JSR: over the
 # step being taken); I_LWALL, I_RWALL: 1 if the line has that wall; I_LWL, I_RWL: the
@@ -160,6 +160,11 @@ I_NCL, I_M, I_NHEAP, I_NEV, I_STEPS, I_REJ, I_EVTOTAL, I_DIRTY, I_DENSE, I_NFREE
 # I_XEND: 1 when (X, V, A) hold the window at the end of the last step (or trial step);
 # 0 while a series step is tried before the window is evaluated (see _loop.advance):
 # the ends of the few balls the event scan reads come from their series then
+
+# I_DEFJ: a damped contact held at 0 whose compression crossed 0 inside the step being
+# taken, -1 if none; F_TDEF: the time of that crossing. Its opening changes no force
+# (a held contact carries none, open or not), so it does not end the step: it is
+# applied, and logged at F_TDEF, after the step (_events._find_event, _settle._post_step)
 
 # ---- the drives (_drive) -------------------------------------------------------------
 # A driven line keeps its drives past the scalar slots, in ints and fs, so that the

@@ -17,7 +17,8 @@ from chainrun.solver._jit import kernel
 from chainrun.solver._output import _commit_dissipation
 from chainrun.solver._state import (
     AFTER_EVENT, AGAIN, B_ACC, EPS, EV_RELOAD, EV_UNLOAD, F_H, F_HCAP, F_HLAST, F_JL, F_JR,
-    F_JSL, F_JSR, F_T, F_TPREV, F_WORK, F_WSTEP, GO_ON, I_DAMPED, I_DRIVEN, I_EVJ, I_EVK,
+    F_JSL, F_JSR, F_T, F_TPREV, F_WORK, F_WSTEP, GO_ON, I_DAMPED, I_DEFJ, I_DRIVEN, I_EVJ,
+    I_EVK,
     I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY, I_XEND, PT, SERIES_CLUSTERS,
     ST_NON_FINITE, ST_STEP_UNDERFLOW, _free_at,
 )
@@ -74,6 +75,7 @@ def _step_to_event(S, t, tstop):
     S.ints[I_JUMP] = 0
     st, h, err, clipped, th, j, kind, lev = _trial(S, t, h, clipped, tay)
     if st != GO_ON:
+        S.ints[I_DEFJ] = -1
         return st
     if tay:
         hnext = S.fs[F_H]  # DOP853's proposal stands; the series sizes its own steps
@@ -82,6 +84,7 @@ def _step_to_event(S, t, tstop):
     if j >= 0:
         st = _land(S, t, h, err, hnext, th, j, kind, lev, tay)
         if st != GO_ON:
+            S.ints[I_DEFJ] = -1  # (the step is taken again, and scanned again)
             return st
     else:
         S.fs[F_T] = tclip if clipped else t + h
