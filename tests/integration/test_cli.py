@@ -405,14 +405,17 @@ def test_a_doubtful_input_and_a_far_off_balance_are_warned_of_and_run(tmp_path):
     assert warned[0].startswith("chainrun: warning: walls.right.gap: an overlap of 1 m")
     error = float(re.search(r"\|dE\|/E = ([\d.e+-]+),", result.stdout).group(1))
     assert error < 1e-12
-    # eight damped beads against a wall at rtol 1e-5: a balance off by 7e-6 of the
-    # impact energy, far above its rounding, is warned of, from the command and the API
+    # eight damped beads against a wall at rtol 1e-5: a balance off by several 1e-6 of
+    # the impact energy (the steps' error: its digits vary with them), far above its
+    # rounding, is warned of, from the command and the API
     path, _, warned = _simulated_with_warnings(
         tmp_path, "loose", 'name = "loose"\nunits = "si"\n[chain]\nn = 8\nk = 1\n'
         'speed = 0.5\ndiameter = 0.0254\nmaterial = "steel"\nrestitution = 0.95\n'
         'damping_law = "tsuji"\n[walls.right]\nmaterial = "steel"\n[solver]\nrtol = 1e-5\n')
     assert len(warned) == 1
-    assert warned[0].startswith("chainrun: warning: run: its energy balance is off by 7.1e-06")
+    assert warned[0].startswith("chainrun: warning: run: its energy balance is off by ")
+    off = float(re.search(r"off by ([\d.e+-]+) of its energy", warned[0]).group(1))
+    assert 1e-6 < off < 1e-4
     with pytest.warns(ChainrunWarning) as caught:
         chainrun.simulate(path)
-    assert [str(w.message)[:36] for w in caught] == ["run: its energy balance is off by 7."]
+    assert [str(w.message)[:34] for w in caught] == ["run: its energy balance is off by "]
