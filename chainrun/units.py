@@ -281,13 +281,22 @@ def _at_place(value: float, place: int) -> str:
 def format_with_error(value: float, error: float, *others: float) -> tuple[str, ...]:
     """``value`` to the place of its ``error``'s second significant digit, and the error
     to two digits, in one notation (602.71 and 0.23, 0.8405088400 and 0.0000000037,
-    55600 and 1700); ``others`` (the ends of a range, say) to that same place after
-    them. Without a finite error > 0, six significant digits and ""."""
+    55600 and 1700); ``others`` (the ends of a range, say) after them, to that same
+    place or to their own second significant digit where that is finer (the small end
+    of a range beside a large deviation: 1400 beside 590000, not 0). Without a finite
+    error > 0, six significant digits and ""."""
     if not (math.isfinite(error) and error > 0.0):
         return (f"{value:.6g}", "", *(f"{x:.6g}" for x in others))
     place = _place(error)
     return (_at_place(value, place), _at_place(float(f"{error:.2g}"), place),
-            *(_at_place(x, place) for x in others))
+            *(_at_place(x, _own_place(x, place)) for x in others))
+
+
+def _own_place(x: float, place: int) -> int:
+    """``place``, or the place of ``x``'s second significant digit where that is finer."""
+    if not (math.isfinite(x) and x != 0.0):
+        return place
+    return min(place, math.floor(math.log10(abs(x))) - 1)
 
 
 def supported_format(fmt: str, value: float, spread: float) -> str:

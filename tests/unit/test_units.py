@@ -60,6 +60,11 @@ def test_a_value_is_shown_to_its_errors_second_digit():
     # the value and its error in one notation, the error's two digits after rounding
     assert format_with_error(0.84050884, 3.7e-9) == ("0.8405088400", "0.0000000037")
     assert format_with_error(55562.5, 1673.0) == ("55600", "1700")
+    # a range's ends to the deviation's place, or to their own second digit where finer
+    assert format_with_error(55562.5, 1673.0, 53210.0, 58001.0) == ("55600", "1700",
+                                                                 "53200", "58000")
+    assert format_with_error(2.0e5, 5.9e5, 1421.0, 1.9e6, 0.0) == (
+        "200000", "590000", "1400", "1900000", "0")
     assert format_with_error(0.3, 0.0996) == ("0.30", "0.10")
     assert format_with_error(-0.004, 0.23) == ("0.00", "0.23")  # no "-0.00"
 
