@@ -309,11 +309,13 @@ def _ensemble_pulses(pulses) -> list[tuple[str, str | None, np.ndarray]]:
     return rows
 
 
-def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) -> str:
-    """An output folder of several runs: a line per run (its largest forward velocity in a
-    prefix that suits the column, to the digits that hold: ``_velocity``; where the runs
-    have force sensors, their ``pulses``, each run's ``measure_pulses``: the wave's
-    speed and the last sensor's peak contact force), and for an ``ensemble`` (one line
+def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None,
+                  swept=None) -> str:
+    """An output folder of several runs: a line per run (the values of the ``swept``
+    keys, ``_swept_columns``; its largest forward velocity in a prefix that suits the
+    column, to the digits that hold: ``_velocity``; where the runs have force sensors,
+    their ``pulses``, each run's ``measure_pulses``: the wave's speed and the last
+    sensor's peak contact force), and for an ``ensemble`` (one line
     over random seeds) the mean and sample standard deviation of each summary number
     over the runs, and of its pulses. Runs that stopped before their terminal state have
     their balls counted, and their velocities and energies given, where they stopped,
@@ -325,7 +327,9 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     speed = scale_for_column("velocity", units, [s.forward[1] if s.forward else 0.0
                                                   for s in summaries])
     wide = max(24, *(len(Path(s.path).name) for s in summaries))
-    head = (f"{'file':<{wide}} {'N':>7} {'K':>4} {'outcome':<10} "
+    swept = swept or []
+    head = (f"{'file':<{wide}}" + "".join(f" {title:>{width}}" for title, width, _ in swept)
+            + f" {'N':>7} {'K':>4} {'outcome':<10} "
             f"{'end (' + time.unit + ')':>14} {'events':>8} "
             f"{'forward (' + speed.unit + ')':>16}")
     damped = any(s.energy.get("dissipated", 0.0) > 0.0 for s in summaries)
@@ -342,7 +346,9 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
         forward = _velocity(*s.forward, s, speed) if s.forward else "0"
         outcome = _OUTCOME_NAMES.get(s.outcome, s.outcome.replace("_", " "))
         share = s.energy.get("dissipated", math.nan)
-        lines.append(f"{Path(s.path).name:<{wide}} {s.n:>7} {s.k:>4} {outcome:<10} "
+        lines.append(f"{Path(s.path).name:<{wide}}"
+                     + "".join(f" {cells[i]:>{width}}" for _, width, cells in swept)
+                     + f" {s.n:>7} {s.k:>4} {outcome:<10} "
                      f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
                      f"{forward:>16}"
                      + (f" {share:>11.2%}" if damped else "")
@@ -369,6 +375,34 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None) ->
     lines += [f"  {label:<{wide}} {_statistics(x, quantity, units)}"
               for label, quantity, x in rows]
     return "\n".join(lines)
+
+
+def _swept_columns(runs) -> list[tuple[str, int, list[str]]]:
+    """The folder table's columns of the keys the runs' sweep sets (their
+    ``overrides``): each key's values, in SI with its unit in one prefix where the key
+    is a quantity (``speed (mm/s)``), else as given; N and K have columns of their own."""
+    from chainrun.units import SWEPT_QUANTITY, scale_for
+
+    overrides = [run.parameters.get("overrides") or {} for run in runs]
+    columns = []
+    for key in dict.fromkeys(key for o in overrides for key in o):
+        name = key.rpartition(".")[2]
+        if key in ("chain.n", "chain.k"):
+            continue
+        values = [o.get(key) for o in overrides]
+        quantity = SWEPT_QUANTITY.get(name)
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                      for v in values)
+        if numbers and quantity is not None and runs[0].units == "si":
+            scaled = scale_for(quantity, "si", values)
+            title = f"{name} ({scaled.unit})" if scaled.unit else name
+            cells = [f"{scaled(float(v)):.6g}" for v in values]
+        else:
+            title = name
+            cells = ["-" if v is None else f"{v:.6g}" if numbers else str(v)
+                     for v in values]
+        columns.append((title, max(len(title), *(len(c) for c in cells)), cells))
+    return columns
 
 
 def _pulse_columns(pulses, units: str) -> list[tuple[str, int, list[str]]]:
@@ -548,7 +582,8 @@ def info(paths: tuple[Path, ...], velocities: bool):
     time, the pulse's width and arrival at each sensor, and the wave's speed fitted
     through them) or, for a line a wall drives by a sine, their steady amplitude,
     phase and transmission at the drive's frequency, and what the file stores. For an output folder (a sweep or an
-    ensemble of seeds, with its index.h5): one line per run, then the mean, standard
+    ensemble of seeds, with its index.h5): one line per run (the values of the keys the
+    sweep sets among them), then the mean, standard
     deviation and range of each number over the runs when they are an ensemble (the
     same line over random seeds), their pulses' too where they have force sensors (the
     wave's speed, each sensor's peak force, width and arrival); the full summary when the
@@ -585,7 +620,8 @@ def info(paths: tuple[Path, ...], velocities: bool):
                     ensemble = is_ensemble(runs)
                     pulses = ([measure_pulses(run) for run in runs]
                               if all(pulsed(run) for run in runs) else None)
-                    click.echo(render_folder(path, summaries, ensemble, pulses))
+                    click.echo(render_folder(path, summaries, ensemble, pulses,
+                                             _swept_columns(runs)))
             else:
                 runs = [read_run(path)]
                 click.echo(render(summarize(runs[0]), _sensors(runs[0])))

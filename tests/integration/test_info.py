@@ -94,6 +94,21 @@ def test_an_output_folder_has_a_line_per_run(table1):
     assert info(table1 / "index.h5").stdout == result.stdout
 
 
+def test_a_sweeps_table_gives_each_runs_swept_value_in_its_unit(tmp_path):
+    """The folder's table has a column of each swept key (N and K have theirs): an SI
+    speed in one prefix, its value as the run's file gives it."""
+    config = tmp_path / "s.toml"
+    config.write_text('name = "s"\nunits = "si"\n[chain]\nn = 6\nk = 1\nspeed = 0.1\n'
+                      'diameter = 0.008\nmaterial = "steel"\n[sweep]\n'
+                      '"chain.speed" = [0.05, 0.2]\n"chain.n" = [6, 7]\n')
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "s")])
+    assert result.exit_code == 0, result.output
+    lines = info(tmp_path / "s").stdout.splitlines()
+    assert lines[1].split()[:5] == ["file", "speed", "(mm/s)", "N", "K"]
+    rows = {line.split()[0]: line.split()[1:3] for line in lines[2:6]}
+    assert sorted(rows.values()) == [["200", "6"], ["200", "7"], ["50", "6"], ["50", "7"]]
+
+
 def test_a_damped_sweeps_lines_give_each_runs_dissipated_share(tmp_path):
     config = tmp_path / "e.toml"
     config.write_text('name = "e"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
