@@ -54,6 +54,14 @@ def trace(line, intervals: int, log: bool = False):
         S.fs[_state.F_TOUT] = marks[i] / P.scales.time
         S.ints[_state.I_HAVEOUT] = 2  # a sample: the kernel only returns there
 
+    def row(t):
+        nonlocal ball_steps, last
+        steps, window = int(S.ints[_state.I_STEPS]), int(S.ints[_state.I_M])
+        ball_steps += (steps - last[0]) * 0.5 * (window + last[1])
+        last = (steps, window)
+        return (t, steps, int(S.ints[_state.I_REJ]), int(S.ints[_state.I_EVTOTAL]), window,
+                int(S.ints[_state.I_NCL]), ball_steps)
+
     read = 0
     ask(0)
     while True:
@@ -63,19 +71,16 @@ def trace(line, intervals: int, log: bool = False):
         elif status == _state.ST_GROW:
             S = _setup._grow(S, int(S.ints[_state.I_NEED]))
         elif status == _state.ST_OUTPUT:
-            steps, window = int(S.ints[_state.I_STEPS]), int(S.ints[_state.I_M])
-            ball_steps += (steps - last[0]) * 0.5 * (window + last[1])
-            last = (steps, window)
+            now = row(marks[read])
             read += 1
             if read % READS == 0:
-                rows.append((marks[read - 1], steps, int(S.ints[_state.I_REJ]),
-                             int(S.ints[_state.I_EVTOTAL]), window,
-                             int(S.ints[_state.I_NCL]), ball_steps))
-            if read == marks.size:
-                break
-            ask(read)
+                rows.append(now)
+            if read < marks.size:
+                ask(read)
         elif status != _state.ST_YIELD:
             break
+    if rows:  # (what the run did at its last instant, after the last read)
+        rows[-1] = row(rows[-1][0])
     return rows
 
 

@@ -687,3 +687,21 @@ def test_steered_section_on_tiny_lines():
         for r in e["runs"]:
             assert r["outcome"] == "terminal" and r["terminal"] and r["balanced"], r
         assert e["met"]
+
+
+def test_the_steps_trace_adds_up_to_the_runs_counts():
+    """benchmarks.steps reads the solver's counters at intervals of a run: over the
+    whole run they add up to what the run's diagnostics count, and the ball-steps
+    summed over the intervals never fall and stay within steps x widest window."""
+    from benchmarks import steps
+    from benchmarks.window import make_line
+    from chainrun.solver import simulate
+
+    line = make_line("damped", 40, 1)
+    rows = steps.trace(line, 4, log=True)
+    d = simulate(line).diagnostics
+    assert len(rows) == 4
+    assert rows[-1][1:4] == (d.steps, d.rejected_steps, d.events)
+    assert [r[0] for r in rows] == sorted(r[0] for r in rows)
+    assert all(a[6] <= b[6] for a, b in zip(rows, rows[1:]))  # ball-steps only grow
+    assert rows[-1][6] <= d.steps * d.max_window
