@@ -18,8 +18,7 @@ from chainrun.solver._output import _commit_dissipation
 from chainrun.solver._state import (
     AFTER_EVENT, AGAIN, B_ACC, EPS, EV_RELOAD, EV_UNLOAD, F_H, F_HCAP, F_HLAST, F_JL, F_JR,
     F_JSL, F_JSR, F_T, F_TPREV, F_WORK, F_WSTEP, GO_ON, I_DAMPED, I_DEFJ, I_DRIVEN, I_EVJ,
-    I_EVK,
-    I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY, I_XEND, PT, SERIES_CLUSTERS,
+    I_EVK, I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY, I_XEND, PT, SERIES_CLUSTERS,
     ST_NON_FINITE, ST_STEP_UNDERFLOW, _free_at,
 )
 from chainrun.solver._steppers import _step, _step_pair, _taylor, _taylor_error
