@@ -33,7 +33,7 @@ READS = 20
 
 def trace(line, intervals: int, log: bool = False):
     """The run of ``line`` to its terminal state, in ``intervals`` intervals of its
-    length (equal, or equal in the logarithm of time over its last three decades):
+    length (equal, or equal in the logarithm of time over its last six decades):
     rows of (t, steps, rejected, events, window, clusters, ball-steps) at each
     interval's end, counts since the start, t in the line's units."""
     from chainrun.solver import DEFAULT_RTOL, _loop, _setup, _state, load_kernels, simulate
@@ -42,7 +42,7 @@ def trace(line, intervals: int, log: bool = False):
     end = simulate(line).end_time
     P = _setup._Prepared(line)
     S = _setup._line_state(P, DEFAULT_RTOL, None, None)
-    ends = (np.geomspace(1e-3 * end, end, intervals) if log
+    ends = (np.geomspace(1e-6 * end, end, intervals) if log
             else np.linspace(0.0, end, intervals + 1)[1:])
     starts = np.concatenate(([0.0], ends[:-1]))
     marks = np.concatenate([np.linspace(a, b, READS + 1)[1:] for a, b in zip(starts, ends)])
