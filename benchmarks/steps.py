@@ -23,6 +23,7 @@ import argparse
 
 import numpy as np
 
+from benchmarks.harness import solve
 from benchmarks.window import make_line
 
 
@@ -35,11 +36,13 @@ def trace(line, intervals: int, log: bool = False):
     """The run of ``line`` to its terminal state, in ``intervals`` intervals of its
     length (equal, or equal in the logarithm of time over its last six decades):
     rows of (t, steps, rejected, events, window, clusters, ball-steps) at each
-    interval's end, counts since the start, t in the line's units."""
-    from chainrun.solver import DEFAULT_RTOL, _loop, _setup, _state, load_kernels, simulate
+    interval's end, counts since the start, t in the line's units. The second run
+    drives the kernels' loop (``_loop.advance``) itself, as ``_driver`` does, to read
+    the counters between its returns."""
+    from chainrun.solver import DEFAULT_RTOL, _loop, _setup, _state, load_kernels
 
     load_kernels()
-    end = simulate(line).end_time
+    end = solve(line).end_time
     P = _setup._Prepared(line)
     S = _setup._line_state(P, DEFAULT_RTOL, None, None)
     ends = (np.geomspace(1e-6 * end, end, intervals) if log

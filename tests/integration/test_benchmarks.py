@@ -695,11 +695,10 @@ def test_the_steps_trace_adds_up_to_the_runs_counts():
     summed over the intervals never fall and stay within steps x widest window."""
     from benchmarks import steps
     from benchmarks.window import make_line
-    from chainrun.solver import simulate
 
     line = make_line("damped", 40, 1)
     rows = steps.trace(line, 4, log=True)
-    d = simulate(line).diagnostics
+    d = harness.solve(line).diagnostics
     assert len(rows) == 4
     assert rows[-1][1:4] == (d.steps, d.rejected_steps, d.events)
     assert [r[0] for r in rows] == sorted(r[0] for r in rows)
