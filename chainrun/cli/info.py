@@ -328,10 +328,12 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None,
                                                   for s in summaries])
     wide = max(24, *(len(Path(s.path).name) for s in summaries))
     swept = swept or []
+    # (a column as wide as its title: "end (paper units)" outgrows "end (µs)")
+    end_title, forward_title = f"end ({time.unit})", f"forward ({speed.unit})"
+    end_wide, forward_wide = max(14, len(end_title)), max(16, len(forward_title))
     head = (f"{'file':<{wide}}" + "".join(f" {title:>{width}}" for title, width, _ in swept)
             + f" {'N':>7} {'K':>4} {'outcome':<10} "
-            f"{'end (' + time.unit + ')':>14} {'events':>8} "
-            f"{'forward (' + speed.unit + ')':>16}")
+            f"{end_title:>{end_wide}} {'events':>8} {forward_title:>{forward_wide}}")
     damped = any(s.energy.get("dissipated", 0.0) > 0.0 for s in summaries)
     if damped:
         head += f" {'dissipated':>11}"
@@ -349,8 +351,8 @@ def render_folder(path: Path, summaries, ensemble: bool = False, pulses=None,
         lines.append(f"{Path(s.path).name:<{wide}}"
                      + "".join(f" {cells[i]:>{width}}" for _, width, cells in swept)
                      + f" {s.n:>7} {s.k:>4} {outcome:<10} "
-                     f"{time(s.end_time):>14.6g} {sum(s.events.values()):>8} "
-                     f"{forward:>16}"
+                     f"{time(s.end_time):>{end_wide}.6g} {sum(s.events.values()):>8} "
+                     f"{forward:>{forward_wide}}"
                      + (f" {share:>11.2%}" if damped else "")
                      + (f" {_holding(s):>13}" if checked else "")
                      + ("".join(f" {cells[i]:>{width}}" for _, width, cells in columns)

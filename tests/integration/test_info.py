@@ -90,6 +90,9 @@ def test_an_output_folder_has_a_line_per_run(table1):
         assert (int(row[1]), int(row[2]), row[3]) == (5, k, "terminal")
         assert float(row[-1]) == pytest.approx(v.max(), rel=1e-5)
     assert len(lines) == 6 and "standard deviation" not in result.stdout
+    # the columns right-aligned under their titles, "forward (paper units)" the widest
+    assert lines[1].endswith("forward (paper units)")
+    assert len({len(line) for line in lines[1:6]}) == 1
     # the folder named by its index is the folder
     assert info(table1 / "index.h5").stdout == result.stdout
 
