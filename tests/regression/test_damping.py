@@ -214,7 +214,7 @@ def test_a_held_contact_opens_where_its_compression_vanishes():
     held = []
     for i in np.flatnonzero(sol.event_kind == EventKind.OPEN):
         j = sol.event_contact[i]
-        before = np.flatnonzero((sol.event_contact[:i] == j))
+        before = np.flatnonzero(sol.event_contact[:i] == j)
         if before.size and sol.event_kind[before[-1]] == EventKind.UNLOAD:
             held.append((int(j), float(sol.event_time[i])))
     assert len(held) > 20
