@@ -468,6 +468,36 @@ def _pair_step() -> list[str]:
     return lines
 
 
+def _branch_error() -> list[str]:
+    """DOP853's error estimate of a step that starts as a force A t^a begins, or ends as
+    one vanishes: a contact closing or opening at compression 0, where c^alpha is a
+    branch point (see ``_steppers._branch_step``)."""
+    ns = dop.N_STAGES
+    nodes = [f"k{i}" for i in range(ns)]
+    (e5x,), (e3x,) = _nystrom(dop.E5), _nystrom(dop.E3)
+    lines = [
+        "@kernel",
+        "def _branch_error(a, at_end):",
+        '    """(g_v, g_x): the error estimate (_error_norm) of a ball\'s velocity and position',
+        "    over a step of h from the instant an acceleration A t^a begins (or, at_end, to",
+        "    the instant A (h - t)^a vanishes), over A h^(a + 1) and A h^(a + 2) and times the",
+        "    tolerance: the stages see A (C h)^a (A ((1 - C) h)^a), and the estimate",
+        "    e5^2 / sqrt(e5^2 + e3^2 / 100) of that alone. Both are 0 to rounding where a is",
+        '    0, 1, 2 or 3: the estimate vanishes on a polynomial acceleration of low degree."""',
+    ]
+    lines += [f"    k{i} = ({float(1.0 - c)!r} if at_end else {float(c)!r}) ** a"
+              for i, c in enumerate(dop.C[:ns])]
+    out = []
+    for name, e5, e3 in (("gv", dop.E5[:ns], dop.E3[:ns]), ("gx", e5x[:ns], e3x[:ns])):
+        lines += [f"    e5 = {_scalar_combo(e5, nodes)}",
+                  f"    e3 = {_scalar_combo(e3, nodes)}",
+                  "    d = np.sqrt(e5 * e5 + 0.01 * e3 * e3)",
+                  f"    {name} = e5 * e5 / d if d > 0.0 else 0.0"]
+        out.append(name)
+    lines.append(f"    return {', '.join(out)}")
+    return lines
+
+
 def generate() -> str:
     from chainrun.solver._state import DB, PT, SERIES_TILE
 
@@ -632,6 +662,7 @@ def generate() -> str:
     lines += ["", ""] + _series(PT, SERIES_TILE, False) + ["", ""]
     lines += _series(PT, SERIES_TILE, True) + ["", ""] + _bounds(PT, DB)
     lines += ["", ""] + _pair_step()
+    lines += ["", ""] + _branch_error()
     return "\n".join(lines) + "\n"
 
 

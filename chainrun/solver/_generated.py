@@ -1318,3 +1318,34 @@ def _pair_step(s, u, h, g, alpha, beta):
     if d == 0.0:
         return s1, u1, 0.0
     return s1, u1, abs(h) * n5 / np.sqrt(2.0 * d)
+
+
+@kernel
+def _branch_error(a, at_end):
+    """(g_v, g_x): the error estimate (_error_norm) of a ball's velocity and position
+    over a step of h from the instant an acceleration A t^a begins (or, at_end, to
+    the instant A (h - t)^a vanishes), over A h^(a + 1) and A h^(a + 2) and times the
+    tolerance: the stages see A (C h)^a (A ((1 - C) h)^a), and the estimate
+    e5^2 / sqrt(e5^2 + e3^2 / 100) of that alone. Both are 0 to rounding where a is
+    0, 1, 2 or 3: the estimate vanishes on a polynomial acceleration of low degree."""
+    k0 = (1.0 if at_end else 0.0) ** a
+    k1 = (0.9473998480412322 if at_end else 0.05260015195876773) ** a
+    k2 = (0.9210997720618483 if at_end else 0.0789002279381516) ** a
+    k3 = (0.8816496580927726 if at_end else 0.1183503419072274) ** a
+    k4 = (0.7183503419072275 if at_end else 0.2816496580927726) ** a
+    k5 = (0.6666666666666667 if at_end else 0.3333333333333333) ** a
+    k6 = (0.75 if at_end else 0.25) ** a
+    k7 = (0.6923076923076923 if at_end else 0.3076923076923077) ** a
+    k8 = (0.3487179487179487 if at_end else 0.6512820512820513) ** a
+    k9 = (0.4 if at_end else 0.6) ** a
+    k10 = (0.1428571428571429 if at_end else 0.8571428571428571) ** a
+    k11 = (0.0 if at_end else 1.0) ** a
+    e5 = 0.01312004499419488 * k0 + -1.2251564463762044 * k5 + -0.4957589496572502 * k6 + 1.6643771824549864 * k7 + -0.35032884874997366 * k8 + 0.3341791187130175 * k9 + 0.08192320648511571 * k10 + -0.022355307863886294 * k11
+    e3 = -0.18980075407240762 * k0 + 4.450312892752409 * k5 + 1.8915178993145003 * k6 + -5.801203960010585 * k7 + -0.4226823213237919 * k8 + -0.1521609496625161 * k9 + 0.20136540080403034 * k10 + 0.02265179219836082 * k11
+    d = np.sqrt(e5 * e5 + 0.01 * e3 * e3)
+    gv = e5 * e5 / d if d > 0.0 else 0.0
+    e5 = -0.18865188001798794 * k0 + 0.9962151331241323 * k3 + 0.23599761577747433 * k4 + -2.8546306823509116 * k5 + -4.082808827933706 * k6 + 6.038341535948958 * k7 + 0.39584534789657555 * k8 + -0.5259249995299615 * k9 + -0.014383242914573597 * k10
+    e3 = -0.45385457342917346 * k0 + 2.6987585022618616 * k3 + 0.6812767760191378 * k4 + -16.885342816594818 * k5 + -13.987876814514605 * k6 + 27.96175549233409 * k7 + 0.3042333850581198 * k8 + -0.3335239499192926 * k9 + 0.014573998784681819 * k10
+    d = np.sqrt(e5 * e5 + 0.01 * e3 * e3)
+    gx = e5 * e5 / d if d > 0.0 else 0.0
+    return gv, gx

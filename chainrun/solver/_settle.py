@@ -16,11 +16,11 @@ from chainrun.solver._events import _load_rate, _log, _rounding
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
     ACTIVE, B_ACC, B_IM, C_ALPHA, C_DORM, C_EPS, C_ETA, C_HELD, C_KAPPA, DORMANT, EPS,
-    EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR, F_T,
+    EV_CLOSE, EV_ENGAGE, EV_OPEN, EV_RELEASE, EV_RELOAD, EV_UNLOAD, FRESH, F_FLOOR, F_H, F_T,
     F_TDEF, HI_ROW, I_DAMPED, I_DEFJ, I_DIRTY, I_EVJ, I_EVK, I_FORCED, I_JUMP, I_M, I_NCL,
     I_NEV, I_SEALED, I_TAY, OPEN, W_HELD, _flight, _free_at, _tw,
 )
-from chainrun.solver._steppers import _ball_now
+from chainrun.solver._steppers import _ball_now, _branch_step
 
 
 @kernel
@@ -54,15 +54,26 @@ def _apply_event(S, j, kind):
     if kind == EV_OPEN or kind == EV_RELEASE:
         ok = _deactivate(S, j, _engage_level(S, j))
         _log(S, t, j, kind)
-    elif kind == EV_CLOSE:
-        ok = _activate(S, j, ACTIVE)
-        _log(S, t, j, EV_CLOSE)
     else:
+        _closing_cap(S, j)
+        if kind == EV_CLOSE:
+            ok = _activate(S, j, ACTIVE)
+            _log(S, t, j, EV_CLOSE)
+            return ok
         dormant = S.cst[j] == DORMANT
         ok = _activate(S, j, FRESH if dormant else ACTIVE)
         if not dormant:  # a dormant contact was closed already: nothing to log
             _log(S, t, j, EV_ENGAGE)
     return ok
+
+
+@kernel(inline="always")
+def _closing_cap(S, j):
+    """Cap the next step where contact j closes or engages now: the first step from a
+    compression of 0 is sized for the closing (``_steppers._branch_step``)."""
+    _, vl, _ = _ball_now(S, j)
+    _, vr, _ = _ball_now(S, j + 1)
+    S.fs[F_H] = min(S.fs[F_H], _branch_step(S, j, vl - vr, False))
 
 
 @kernel(inline="always")

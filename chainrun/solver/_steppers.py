@@ -26,14 +26,14 @@ import numpy as np
 from chainrun.solver._drive import _drive_ends, _drive_series, _drive_stage
 from chainrun.solver._forces import _force, _rhs
 from chainrun.solver._generated import (
-    _dense_ball, _dense_rows, _dense_stages, _error_norm, _linear_orders, _series_orders,
-    _series_orders_mixed, _stages, _step_band,
+    _branch_error, _dense_ball, _dense_rows, _dense_stages, _error_norm, _linear_orders,
+    _series_orders, _series_orders_mixed, _stages, _step_band,
 )
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    B_ACC, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR, F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL,
-    F_TPREV, I_DCUR, I_DENSE, I_DRIVEN, I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE,
-    I_RWL, I_TAY, I_UNIT, I_XEND,
+    B_ACC, B_IM, C_ALPHA, C_BETA, C_ETA, C_KAPPA, EPS, F_ALPHA, F_HLAST, F_JSL, F_JSR,
+    F_QV1, F_QV2, F_QX1, F_QX2, F_T, F_TOL, F_TPREV, I_DAMPED, I_DCUR, I_DENSE, I_DRIVEN,
+    I_DSTAMP, I_DT, I_LWL, I_M, I_MODE, I_NDRIVE, I_RWL, I_TAY, I_UNIT, I_XEND,
     MODE_LINEAR, MODE_MIXED, PT, SERIES_TILE, TAYLOR_TOL, W_ACC, W_ALPHA, W_IM, _NS,
     _find_cluster, _free_at, _tw,
 )
@@ -356,3 +356,48 @@ def _ball_now(S, b):
         return S.X[p], S.V[p], S.A[p]
     x, v = _free_at(S, b, S.fs[F_T])
     return x, v, S.bp[B_ACC, b]
+
+
+#: the error estimate that a step from a contact's closing, or to its opening, is sized
+#: for, as a fraction of the tolerance (the smooth part of the motion has the rest)
+BRANCH_ERR = 0.5
+
+
+@kernel
+def _branch_step(S, j, w, at_end):
+    """The longest DOP853 step from the instant contact j closes at approach speed w
+    (at_end: to the instant it opens at parting speed w) whose error estimate, from
+    the contact's force alone, is BRANCH_ERR of the tolerance.
+
+    At compression 0 the force kappa c^alpha is a branch point: with c = w t the balls'
+    accelerations go as t^alpha (a damped contact's eta c^beta w as t^beta), and a
+    DOP853 step that starts or ends there errs as h^(alpha + 1) in the velocities, not
+    as h^9. Sized by the step before, which the closing cut short, a first step fails
+    its error test, and then shrinks by the smooth motion's factor; a step that lands
+    on an opening fails where it is longer than this. The estimate is known in closed
+    form (``_branch_error``), here for the lighter ball's acceleration; inf where
+    nothing bounds the step (two walls, a slow press at w = 0)."""
+    im = max(S.bp[B_IM, j], S.bp[B_IM, j + 1])
+    if not w > 0.0 or im == 0.0:
+        return np.inf
+    tol = BRANCH_ERR * S.fs[F_TOL]
+    a = S.cp[C_ALPHA, j]
+    h = _branch_bound(S.cp[C_KAPPA, j] * w ** a * im, a, at_end, tol)
+    if S.ints[I_DAMPED] == 1:
+        b = S.cp[C_BETA, j]
+        h = min(h, _branch_bound(S.cp[C_ETA, j] * w ** (b + 1.0) * im, b, at_end, tol))
+    return h
+
+
+@kernel(inline="always")
+def _branch_bound(amp, a, at_end, tol):
+    """The longest h whose estimate (``_branch_error``) of an acceleration amp t^a that
+    begins at the step's start (or vanishes at its end) is within tol, in the velocity
+    and in the position."""
+    gv, gx = _branch_error(a, at_end)
+    h = np.inf
+    if amp * gv > 0.0:
+        h = (tol / (amp * gv)) ** (1.0 / (a + 1.0))
+    if amp * gx > 0.0:
+        h = min(h, (tol / (amp * gx)) ** (1.0 / (a + 2.0)))
+    return h

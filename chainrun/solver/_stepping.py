@@ -16,12 +16,14 @@ from chainrun.solver._events import _find_event, _grazes, _load_rate, _rounding
 from chainrun.solver._jit import kernel
 from chainrun.solver._output import _commit_dissipation
 from chainrun.solver._state import (
-    AFTER_EVENT, AGAIN, B_ACC, EPS, EV_RELOAD, EV_UNLOAD, F_H, F_HCAP, F_HLAST, F_JL, F_JR,
-    F_JSL, F_JSR, F_T, F_TPREV, F_WORK, F_WSTEP, GO_ON, I_DAMPED, I_DEFJ, I_DRIVEN, I_EVJ,
-    I_EVK, I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY, I_XEND, PT, SERIES_CLUSTERS,
-    ST_NON_FINITE, ST_STEP_UNDERFLOW, _free_at,
+    AFTER_EVENT, AGAIN, B_ACC, C_ETA, EPS, EV_OPEN, EV_RELOAD, EV_UNLOAD, F_H, F_HCAP,
+    F_HLAST, F_JL, F_JR, F_JSL, F_JSR, F_T, F_TPREV, F_WORK, F_WSTEP, GO_ON, I_DAMPED,
+    I_DEFJ, I_DRIVEN, I_EVJ, I_EVK, I_JUMP, I_M, I_NCL, I_POST, I_REJ, I_STEPS, I_TAY,
+    I_XEND, PT, SERIES_CLUSTERS, ST_NON_FINITE, ST_STEP_UNDERFLOW, _free_at,
 )
-from chainrun.solver._steppers import _step, _step_pair, _taylor, _taylor_error
+from chainrun.solver._steppers import (
+    _ball_at, _branch_step, _step, _step_pair, _taylor, _taylor_error,
+)
 
 
 @kernel(inline="always")
@@ -166,6 +168,17 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     error test: a damped contact's unload takes four iterates on average, each of
     which stepped every ball of the window."""
     hev = th * h
+    if kind == EV_OPEN and err > 1.0 and not tay and (
+            S.ints[I_DAMPED] == 0 or S.cp[C_ETA, j] == 0.0):
+        # a step that ends on an opening ends on a branch point of the force, and fails
+        # its error test where it is longer than _branch_step allows: rather than try
+        # it, step halfway towards the opening (as after a landing that failed)
+        _, vl = _ball_at(S, j, th)
+        _, vr = _ball_at(S, j + 1, th)
+        if hev > max(_branch_step(S, j, vr - vl, True), 64.0 * EPS * max(1.0, abs(t))):
+            _restore_start(S)
+            S.fs[F_H] = 0.5 * hev
+            return AGAIN
     landing = 0  # 1 landed, 2 the step failed its error test, 3 Newton gave up
     nit = 0
     whole = True  # whether the last step taken was the whole window's

@@ -321,6 +321,16 @@ def test_steps_over_an_event_land_on_it():
     assert d.rejected_steps < 0.3 * d.steps
 
 
+def test_the_step_after_a_closing_is_sized_for_it():
+    """The first step from a contact closed at compression 0, a branch point of its
+    force, errs as h^(alpha + 1) and is sized for that (``_steppers._branch_step``):
+    sized by the step the closing cut short, it failed its error test after nearly
+    every closing. This line breaks into clusters that collide again and again (9,000
+    events): half as many steps were rejected as were taken, a third now."""
+    d = run(400, 20, 1.5).diagnostics
+    assert d.rejected_steps < 0.4 * d.steps
+
+
 def _stopped_state(n, k, alpha, t_end):
     return _stopped_line_state(Line.paper(n, k, alpha), t_end)
 
