@@ -34,6 +34,15 @@ def field(text: str, label: str) -> str:
     return next(line for line in text.splitlines() if line.startswith(label))
 
 
+def _simulate(tmp_path, text: str, out: str = "out") -> Path:
+    """The output folder of ``chainrun simulate`` on an experiment written as ``text``."""
+    config = tmp_path / f"{out}.toml"
+    config.write_text(text)
+    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / out)])
+    assert result.exit_code == 0, result.output
+    return tmp_path / out
+
+
 def test_a_run_file_is_summarised_from_its_own_arrays(table1):
     path = table1 / "k=2.h5"
     with h5py.File(path) as f:
@@ -100,30 +109,24 @@ def test_an_output_folder_has_a_line_per_run(table1):
 def test_a_sweeps_table_gives_each_runs_swept_value_in_its_unit(tmp_path):
     """The folder's table has a column of each swept key (N and K have theirs): an SI
     speed in one prefix, its value as the run's file gives it."""
-    config = tmp_path / "s.toml"
-    config.write_text('name = "s"\nunits = "si"\n[chain]\nn = 6\nk = 1\nspeed = 0.1\n'
-                      'diameter = 0.008\nmaterial = "steel"\n[sweep]\n'
-                      '"chain.speed" = [0.05, 0.2]\n"chain.n" = [6, 7]\n')
-    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "s")])
-    assert result.exit_code == 0, result.output
-    lines = info(tmp_path / "s").stdout.splitlines()
+    out = _simulate(tmp_path, 'name = "s"\nunits = "si"\n[chain]\nn = 6\nk = 1\nspeed = 0.1\n'
+                    'diameter = 0.008\nmaterial = "steel"\n[sweep]\n'
+                    '"chain.speed" = [0.05, 0.2]\n"chain.n" = [6, 7]\n')
+    lines = info(out).stdout.splitlines()
     assert lines[1].split()[:5] == ["file", "speed", "(mm/s)", "N", "K"]
     rows = {line.split()[0]: line.split()[1:3] for line in lines[2:6]}
     assert sorted(rows.values()) == [["200", "6"], ["200", "7"], ["50", "6"], ["50", "7"]]
 
 
 def test_a_damped_sweeps_lines_give_each_runs_dissipated_share(tmp_path):
-    config = tmp_path / "e.toml"
-    config.write_text('name = "e"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
-                      'diameter = 0.0254\nmaterial = "steel"\nrestitution = 0.9\n'
-                      'damping_law = "tsuji"\n[sweep]\n"chain.restitution" = [0.5, 1.0]\n')
-    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(tmp_path / "e")])
-    assert result.exit_code == 0, result.output
-    lines = info(tmp_path / "e").stdout.splitlines()
+    out = _simulate(tmp_path, 'name = "e"\nunits = "si"\n[chain]\nn = 5\nk = 1\nspeed = 0.5\n'
+                    'diameter = 0.0254\nmaterial = "steel"\nrestitution = 0.9\n'
+                    'damping_law = "tsuji"\n[sweep]\n"chain.restitution" = [0.5, 1.0]\n')
+    lines = info(out).stdout.splitlines()
     assert lines[1].split()[-1] == "dissipated"
     shares = {}
     for line in lines[2:4]:
-        with h5py.File(tmp_path / "e" / line.split()[0]) as f:
+        with h5py.File(out / line.split()[0]) as f:
             m, v = f["model/mass"][0], f["model/velocity"][0]  # the striker's
             lost = f["results/contact_dissipation"][()].sum() / (0.5 * m * v**2)
         shares[line.split()[0]] = (float(line.split()[-1].rstrip("%")), 100 * lost)
@@ -266,11 +269,8 @@ def test_an_si_runs_accuracy_and_counts_say_what_they_measure(tmp_path):
     than the paper's 1% (1 mm/s here), counted here from the file; |dP| is a momentum
     in N s (rounding's: below 1e-14 of the striker's momentum), and the run ends at a
     time with its unit, in the file as in words."""
-    out = tmp_path / "out"
-    config = tmp_path / "sol.toml"
-    config.write_text('name = "sol"\nunits = "si"\n[chain]\nn = 61\nk = 1\nspeed = 0.1\n'
-                      'diameter = 0.008\nmaterial = "stainless_steel"\n')
-    assert CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)]).exit_code == 0
+    out = _simulate(tmp_path, 'name = "sol"\nunits = "si"\n[chain]\nn = 61\nk = 1\n'
+                    'speed = 0.1\ndiameter = 0.008\nmaterial = "stainless_steel"\n')
     with h5py.File(out / "run.h5") as f:
         v = f["results/final_velocity"][()]
         m = f["model/mass"][()]
@@ -292,14 +292,10 @@ def test_an_si_runs_accuracy_and_counts_say_what_they_measure(tmp_path):
 def test_a_precompressed_runs_summary_names_its_precompression(tmp_path):
     """The line's precompression (a static force on the first ball at rest, held by
     the right wall) is said as one, and each peak force is said to include it."""
-    out = tmp_path / "out"
-    config = tmp_path / "pre.toml"
-    config.write_text('name = "pre"\nunits = "si"\n[chain]\nn = 30\nk = 1\nspeed = 0.1\n'
-                      'diameter = 0.008\nmaterial = "stainless_steel"\nprecompression = 1.0\n'
-                      '[walls.right]\n[output]\nsensors = [10, 20]\nsensor_dt = 1e-7\n'
-                      '[solver]\nt_end = 6e-4\n')
-    result = CliRunner().invoke(main, ["simulate", str(config), "-o", str(out)])
-    assert result.exit_code == 0, result.output
+    out = _simulate(tmp_path, 'name = "pre"\nunits = "si"\n[chain]\nn = 30\nk = 1\n'
+                    'speed = 0.1\ndiameter = 0.008\nmaterial = "stainless_steel"\n'
+                    'precompression = 1.0\n[walls.right]\n[output]\nsensors = [10, 20]\n'
+                    'sensor_dt = 1e-7\n[solver]\nt_end = 6e-4\n')
     text = info(out / "run.h5").stdout
     assert "precompressed 1 N (a static force on ball 2, held by the right wall)" in field(
         text, "line")
