@@ -13,8 +13,10 @@ of its own.
 
 from __future__ import annotations
 
+import numpy as np
+
 from chainrun.solver._drive import _drive_place, _drive_stage, _pinned
-from chainrun.solver._forces import _rhs
+from chainrun.solver._forces import _cluster_accelerations, _rhs
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import (
@@ -32,12 +34,9 @@ from chainrun.solver._state import (
 
 @kernel
 def _sync(S):
-    """Write the compact state back to the balls (all at the current time).
-
-    Called before every change of structure, so each cluster's energy is projected
-    back to its value at the last change first.
-    """
-    _project_energy(S)
+    """Write the compact state back to the balls (all at the current time), before a
+    change of structure: each cluster that the change removes is projected back to its
+    energy then (``_remove_cluster``)."""
     t = S.fs[F_T]
     for p in range(S.ints[I_M]):
         b = S.cb[p]
@@ -48,15 +47,26 @@ def _sync(S):
 
 @kernel
 def _remove_cluster(S, c):
+    """Take cluster c off the list (merged, split or left alone). One packed into the
+    compact arrays has its energy projected back to its value when it formed
+    (``_projection``), and its balls take the projected velocities (they are synced)."""
+    o = S.coff[c]
+    if o >= 0 and _project_energy(S, c):
+        for b in range(S.clo[c], S.chi[c] + 1):
+            S.bv[b] = S.V[o + b - S.clo[c]]
     n = S.ints[I_NCL]
     for i in range(c, n - 1):
         S.clo[i] = S.clo[i + 1]
         S.chi[i] = S.chi[i + 1]
+        S.coff[i] = S.coff[i + 1]
+        S.cen[i] = S.cen[i + 1]
     S.ints[I_NCL] = n - 1
 
 
 @kernel
 def _insert_cluster(S, lo, hi):
+    """Put cluster lo..hi on the list, not yet packed (coff -1: ``_rebuild`` packs it
+    and measures its energy)."""
     n = S.ints[I_NCL]
     if n >= S.clo.shape[0]:
         return False
@@ -64,9 +74,12 @@ def _insert_cluster(S, lo, hi):
     while i > 0 and S.clo[i - 1] > lo:
         S.clo[i] = S.clo[i - 1]
         S.chi[i] = S.chi[i - 1]
+        S.coff[i] = S.coff[i - 1]
+        S.cen[i] = S.cen[i - 1]
         i -= 1
     S.clo[i] = lo
     S.chi[i] = hi
+    S.coff[i] = -1
     S.ints[I_NCL] = n + 1
     return True
 
@@ -234,7 +247,13 @@ def _unseal_near_clusters(S):
 
 @kernel(inline="always")
 def _rebuild(S):
-    """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed."""
+    """Pack the clusters' balls into the compact arrays; 0 if done, else the size needed.
+
+    A cluster packed before keeps its accelerations and the energy it formed with; a
+    new one (``coff`` -1) has them computed: an event costs the clusters it touches.
+    On a damped or driven line every acceleration is computed again (a damped contact
+    switched to or from its held force, or a drive's term, changes them in place).
+    """
     if S.ints[I_SEALED] > 0:
         _unseal_near_clusters(S)
     ncl = S.ints[I_NCL]
@@ -245,13 +264,19 @@ def _rebuild(S):
         return m
     for p in range(S.ints[I_M]):
         S.bmap[S.cb[p]] = -1
+        S.A0[p] = S.A[p]  # (the clusters kept move in the compact arrays)
     t = S.fs[F_T]
     p = 0
     for c in range(ncl):
+        old = S.coff[c]
         S.coff[c] = p
+        if old < 0:
+            S.cen[c] = np.nan  # (measured below, once its lanes are set)
         for b in range(S.clo[c], S.chi[c] + 1):
             S.cb[p] = b
             S.X[p], S.V[p] = _free_at(S, b, t)
+            if old >= 0:
+                S.A[p] = S.A0[old + b - S.clo[c]]
             S.bmap[b] = p
             S.WP[W_IM, p] = S.bp[B_IM, b]
             S.WP[W_ACC, p] = S.bp[B_ACC, b]
@@ -286,9 +311,14 @@ def _rebuild(S):
     pr = S.bmap[last] - 1
     S.ints[I_LWL] = pl if S.ints[I_LWALL] == 1 and pl >= 0 and S.TR[pl] != 0.0 else -1
     S.ints[I_RWL] = pr if S.ints[I_RWALL] == 1 and pr >= 0 and S.TR[pr] != 0.0 else -1
+    whole = damped or S.ints[I_DRIVEN] == 1
     for c in range(ncl):
-        S.cen[c] = _cluster_energy(S, c)
-    _rhs(S, S.X, S.V, S.A)
+        if np.isnan(S.cen[c]):
+            S.cen[c] = _cluster_energy(S, c)
+            if not whole:
+                _cluster_accelerations(S, S.coff[c], S.coff[c] + S.chi[c] - S.clo[c])
+    if whole:
+        _rhs(S, S.X, S.V, S.A)
     if S.ints[I_DRIVEN] == 1:
         _drive_place(S)
         _drive_stage(S, S.A, S.FS, t, 0.0, True)

@@ -105,6 +105,21 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
         out[nc] = F[nc - 1] * IM[nc] + GA[nc]
 
 
+@kernel
+def _cluster_accelerations(S, o, e):
+    """Accelerations of compact balls o..e, one cluster, at X into A (forces into FS),
+    the numbers ``_accelerations`` gives them (an undamped line's)."""
+    F = S.FS
+    _forces(S.X, F, S.TR, S.WP[W_ALPHA], o, e, S.ints[I_MODE], S.fs[F_ALPHA])
+    IM = S.WP[W_IM]
+    GA = S.WP[W_ACC]
+    unit = S.ints[I_UNIT] == 1
+    for p in range(o, e + 1):
+        fl = F[p - 1] if p > o else 0.0
+        fr = F[p] if p < e else 0.0
+        S.A[p] = fl - fr if unit else (fl - fr) * IM[p] + GA[p]
+
+
 @kernel(inline="always")
 def _series_terms(TX, r, G, IM, nc, s, unit):
     """Row r of the balls' series from their contact lanes' force terms G[0:nc] (one

@@ -1,4 +1,4 @@
-"""Energy projection: each cluster's internal energy, restored at every change of structure.
+"""Energy projection: each cluster's internal energy, restored when its structure changes.
 
 A cluster's internal energy (kinetic energy about its mean velocity, plus the
 potential of its contacts, less the work of its external forces beyond what moves its
@@ -14,7 +14,7 @@ import numpy as np
 from chainrun.solver._forces import _potential
 from chainrun.solver._jit import kernel
 from chainrun.solver._state import (
-    F_ALPHA, F_EPROJ, I_DAMPED, I_DRIVEN, I_MODE, I_NCL, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA,
+    F_ALPHA, F_EPROJ, I_DAMPED, I_DRIVEN, I_MODE, I_UNIT, MODE_MIXED, W_ACC, W_ALPHA,
     W_IM, W_MASS,
 )
 
@@ -72,49 +72,53 @@ def _cluster_energy(S, c):
 
 
 @kernel(inline="always")
-def _project_energy(S):
-    """Restore each cluster's internal energy, conserved exactly between changes of structure.
+def _project_energy(S, c):
+    """Restore cluster c's internal energy, conserved exactly since it formed; whether
+    its velocities changed.
 
-    The velocities of the balls that move (|v| above 1e-3 of the cluster's largest)
-    are scaled by one factor about their own (mass-weighted) mean: momentum is
-    untouched, and balls nearly at rest (ahead of a wave, or in its wake, or a wall)
-    are never nudged into openings or collisions of rounding size. A correction that
-    is not small against the motion it rescales (over 1e-6 of its kinetic energy) is
-    not that motion's integration error, and is not applied. The corrections add up in
-    fs[F_EPROJ], a measure of the integration error. (Hairer, Lubich & Wanner,
-    Geometric Numerical Integration, IV.4: projection methods.) A damped line's energy
-    is not conserved, nor a driven line's, and neither is ever projected.
+    Called as the cluster is taken apart or joined to another (``_clusters``), so that
+    each cluster's energy is restored when its structure changes, and an event costs
+    the clusters it touches. The velocities of the balls that move (|v| above 1e-3 of
+    the cluster's largest) are scaled by one factor about their own (mass-weighted)
+    mean: momentum is untouched, and balls nearly at rest (ahead of a wave, or in its
+    wake, or a wall) are never nudged into openings or collisions of rounding size. A
+    correction that is not small against the motion it rescales (over 1e-6 of its
+    kinetic energy) is not that motion's integration error, and is not applied. The
+    corrections add up in fs[F_EPROJ], a measure of the integration error. (Hairer,
+    Lubich & Wanner, Geometric Numerical Integration, IV.4: projection methods.) A
+    damped line's energy is not conserved, nor a driven line's, and neither is ever
+    projected.
     """
     if S.ints[I_DAMPED] == 1 or S.ints[I_DRIVEN] == 1:
-        return
+        return False
     M = S.WP[W_MASS]
-    for c in range(S.ints[I_NCL]):
-        o = S.coff[c]
-        e = o + S.chi[c] - S.clo[c]
-        defect = S.cen[c] - _cluster_energy(S, c)
-        vmax = 0.0
-        for p in range(o, e + 1):
-            vmax = max(vmax, abs(S.V[p]))
-        cut = 1e-3 * vmax
-        us = 0.0
-        ms = 0.0
-        k = 0
-        for p in range(o, e + 1):
-            if abs(S.V[p]) > cut:
-                us += M[p] * S.V[p]
-                ms += M[p]
-                k += 1
-        if k < 2:
-            continue
-        us /= ms
-        ks = 0.0
-        for p in range(o, e + 1):
-            if abs(S.V[p]) > cut:
-                ks += 0.5 * M[p] * (S.V[p] - us) * (S.V[p] - us)
-        if not (ks > 0.0 and abs(defect) <= 1e-6 * ks):
-            continue
-        S.fs[F_EPROJ] += abs(defect)
-        lam = np.sqrt(1.0 + defect / ks)
-        for p in range(o, e + 1):
-            if abs(S.V[p]) > cut:
-                S.V[p] = us + lam * (S.V[p] - us)
+    o = S.coff[c]
+    e = o + S.chi[c] - S.clo[c]
+    defect = S.cen[c] - _cluster_energy(S, c)
+    vmax = 0.0
+    for p in range(o, e + 1):
+        vmax = max(vmax, abs(S.V[p]))
+    cut = 1e-3 * vmax
+    us = 0.0
+    ms = 0.0
+    k = 0
+    for p in range(o, e + 1):
+        if abs(S.V[p]) > cut:
+            us += M[p] * S.V[p]
+            ms += M[p]
+            k += 1
+    if k < 2:
+        return False
+    us /= ms
+    ks = 0.0
+    for p in range(o, e + 1):
+        if abs(S.V[p]) > cut:
+            ks += 0.5 * M[p] * (S.V[p] - us) * (S.V[p] - us)
+    if not (ks > 0.0 and abs(defect) <= 1e-6 * ks):
+        return False
+    S.fs[F_EPROJ] += abs(defect)
+    lam = np.sqrt(1.0 + defect / ks)
+    for p in range(o, e + 1):
+        if abs(S.V[p]) > cut:
+            S.V[p] = us + lam * (S.V[p] - us)
+    return True

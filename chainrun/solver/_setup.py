@@ -315,7 +315,7 @@ def _line_state(P: _Prepared, rtol, t_end, max_events, closed_form=True) -> _sta
         bmap=np.full(nb, -1, np.int64), bp=bp,
         cst=cst, lvl=lvl, stamp=np.zeros(ncont, np.int64), cp=cp,
         sl=np.zeros((_state.NSL_DAMPED if P.damped else _state.NSL, ncont)),
-        clo=clo, chi=chi, coff=np.zeros(ccap, np.int64), cen=np.zeros(ccap),
+        clo=clo, chi=chi, coff=np.full(ccap, -1, np.int64), cen=np.zeros(ccap),
         **_alloc_window(min(nb, _INITIAL_WINDOW)),
         # every contact can be predicted twice (from the freed balls on either side),
         # and every other one can be a sealed collision's end
@@ -334,5 +334,8 @@ def _grow(S: _state.State, need: int) -> _state.State:
     cap = min(n, max(need, 2 * S.X.shape[0]))
     window = _alloc_window(cap)
     m = int(S.ints[_state.I_M])
-    window["cb"][:m] = S.cb[:m]
+    # the packing and accelerations of the clusters that did not change are kept
+    # (_clusters._rebuild)
+    for name in ("cb", "X", "V", "A"):
+        window[name][:m] = getattr(S, name)[:m]
     return S._replace(**window)

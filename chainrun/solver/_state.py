@@ -239,7 +239,8 @@ State = namedtuple(
         "bx", "bv", "bt", "sep_t", "sep_v", "bmap", "bp",
         # contacts, shape (N-1,) (at least 1); their parameters (cp, rows C_*)
         "cst", "lvl", "stamp", "cp", "sl",
-        # clusters: ball range, offset in the compact arrays, energy since the last change
+        # clusters: ball range, offset in the compact arrays (-1 until packed), energy
+        # since it formed
         "clo", "chi", "coff", "cen",
         # compact (integrated) balls: state, step start, dense-stage positions (XS; a
         # series step's scratch row of one order's forces, lanes long),

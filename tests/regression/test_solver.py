@@ -371,6 +371,64 @@ def test_interpolant_of_one_ball_is_the_whole_windows(n, k, alpha, t_end):
     np.testing.assert_array_equal(S.FV[:, :m], by_ball[1])
 
 
+def _cluster_numbers(S, c):
+    """Cluster c of a paper line (masses and stiffnesses 1, Hertz), written anew with
+    numpy from its compact positions and velocities: its accelerations and its internal
+    energy (kinetic about its mean velocity, and its contacts')."""
+    o = int(S.coff[c])
+    e = o + int(S.chi[c] - S.clo[c])
+    x, v = S.X[o:e + 1], S.V[o:e + 1]
+    comp = x[:-1] - x[1:]
+    f = np.sign(comp) * np.abs(comp) ** 1.5
+    a = np.zeros(e - o + 1)
+    a[:-1] -= f
+    a[1:] += f
+    energy = 0.5 * np.sum((v - v.mean()) ** 2) + np.sum(np.abs(comp) ** 2.5 / 2.5)
+    return a, energy
+
+
+@pytest.mark.slow  # the Python twins of the cluster kernels compile first (~30 s)
+def test_an_event_costs_the_clusters_it_touches():
+    """A change of structure projects and measures the cluster it happens in alone (see
+    docs/design.md, a change of structure): the others keep the accelerations and the
+    energy they had, rows moved as the compact arrays are packed again, and those are
+    their positions' accelerations; the new clusters' are computed."""
+    from chainrun.solver import _clusters, _state
+
+    S = _stopped_state(80, 20, 1.5, 90.0)
+    ncl = int(S.ints[_state.I_NCL])
+    assert ncl >= 3
+    sizes = S.chi[:ncl] - S.clo[:ncl] + 1
+    first = int(np.argmax(sizes >= 3))  # a cluster with clusters after it to move
+    assert first < ncl - 1
+    kept = {}
+    for c in range(first + 1, ncl):
+        o = int(S.coff[c])
+        e = o + int(sizes[c]) - 1
+        kept[int(S.clo[c])] = (S.A[o:e + 1].copy(), S.cen[c])
+    # its first contact opens: its first ball flies off, and every cluster after it
+    # moves one row down the compact arrays
+    j = int(S.clo[first])
+    twin(_clusters._sync)(S)
+    assert twin(_clusters._deactivate)(S, j, 0.0)
+    assert twin(_clusters._rebuild)(S) == 0
+    assert S.bmap[j] == -1
+    for c in range(int(S.ints[_state.I_NCL])):
+        o = int(S.coff[c])
+        e = o + int(S.chi[c] - S.clo[c])
+        a, energy = _cluster_numbers(S, c)
+        np.testing.assert_allclose(S.A[o:e + 1], a, rtol=0, atol=1e-13 * max(1, abs(a).max()))
+        lo = int(S.clo[c])
+        if lo in kept:
+            assert o == int(np.flatnonzero(S.cb == lo)[0])
+            np.testing.assert_array_equal(S.A[o:e + 1], kept[lo][0])
+            assert S.cen[c] == kept[lo][1]
+        else:
+            assert lo == j + 1
+            assert S.cen[c] == pytest.approx(energy, rel=1e-12)
+    assert set(kept) <= {int(b) for b in S.clo[:int(S.ints[_state.I_NCL])]}
+
+
 @pytest.mark.slow  # the Python twins of the step kernels compile first (~20 s)
 @pytest.mark.parametrize(("line", "t_end"), [
     (Line.paper(80, 20, 1.5), 90.0),  # 4 clusters
