@@ -162,11 +162,11 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     in I_EVJ, I_EVK), AGAIN where the step is to be tried again shorter (the state
     restored to its start), or ST_STEP_UNDERFLOW.
 
-    Newton's first iterate is the whole window's step, with its error test; a DOP853
-    step's later iterates are taken at the event's two balls alone (``_step_pair``,
-    the same numbers there), and the step it lands on is then taken whole, with its
-    error test: a damped contact's unload takes four iterates on average, each of
-    which stepped every ball of the window."""
+    A DOP853 step's iterates are taken at the event's two balls alone (``_step_pair``,
+    the same numbers there as the window's step), and the step it lands on is then
+    taken whole, with its error test: one step of the window for each event (a
+    damped contact's unload takes four iterates on average). A series step's iterates
+    are evaluations of its series over the window."""
     hev = th * h
     if kind == EV_OPEN and err > 1.0 and not tay and (
             S.ints[I_DAMPED] == 0 or S.cp[C_ETA, j] == 0.0):
@@ -183,13 +183,13 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     nit = 0
     whole = True  # whether the last step taken was the whole window's
     while landing == 0:
-        if tay or nit == 0:
+        if tay:
             if not (_step(S, hev) <= 1.0):
                 landing = 2
                 break
         else:
-            # Newton's later iterates need the event's two balls alone; the step
-            # that is kept is taken whole below
+            # Newton's iterates need the event's two balls alone; the step that is
+            # kept is taken whole below
             _step_pair(S, hev, j)
             whole = False
         xl, vl, al = _end_ball(S, j, t + hev)
@@ -209,6 +209,14 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
             landing = 3  # the step stays the last one taken (at this hev)
             break
         hev += dh
+    if landing == 3 and err > 1.0:
+        # an event seen only on a failed step, and not there on a good one:
+        # shrink the step as for any failed step
+        _restore_start(S)
+        S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / (PT if tay else 8)))
+        if tay:
+            S.fs[F_HCAP] = S.fs[F_H]
+        return AGAIN
     if landing != 2 and not whole and not (_step(S, hev) <= 1.0):
         landing = 2
     if landing == 2:
@@ -221,14 +229,6 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
         S.ints[I_REJ] += 1
         if hev < 8.0 * EPS * max(1.0, abs(t)):
             return ST_STEP_UNDERFLOW
-        return AGAIN
-    if landing == 3 and err > 1.0:
-        # an event seen only on a failed step, and not there on a good one:
-        # shrink the step as for any failed step
-        _restore_start(S)
-        S.fs[F_H] = h * max(0.2, 0.9 * err ** (-1.0 / (PT if tay else 8)))
-        if tay:
-            S.fs[F_HCAP] = S.fs[F_H]
         return AGAIN
     S.fs[F_HLAST] = hev
     S.fs[F_T] = t + hev
