@@ -107,17 +107,25 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
 
 @kernel
 def _cluster_accelerations(S, o, e):
-    """Accelerations of compact balls o..e, one cluster, at X into A (forces into FS),
-    the numbers ``_accelerations`` gives them (an undamped line's)."""
+    """Accelerations of compact balls o..e, one cluster, at X into A (forces into FS):
+    ``_accelerations``' operations on its lanes, an undamped line's."""
     F = S.FS
+    A = S.A
     _forces(S.X, F, S.TR, S.WP[W_ALPHA], o, e, S.ints[I_MODE], S.fs[F_ALPHA])
-    IM = S.WP[W_IM]
-    GA = S.WP[W_ACC]
-    unit = S.ints[I_UNIT] == 1
-    for p in range(o, e + 1):
-        fl = F[p - 1] if p > o else 0.0
-        fr = F[p] if p < e else 0.0
-        S.A[p] = fl - fr if unit else (fl - fr) * IM[p] + GA[p]
+    if e == o:  # (a ball alone: no contact)
+        A[o] = 0.0 if S.ints[I_UNIT] == 1 else S.WP[W_ACC, o]
+    elif S.ints[I_UNIT] == 1:
+        A[o] = -F[o]
+        for p in range(o + 1, e):
+            A[p] = F[p - 1] - F[p]
+        A[e] = F[e - 1]
+    else:
+        IM = S.WP[W_IM]
+        GA = S.WP[W_ACC]
+        A[o] = -F[o] * IM[o] + GA[o]
+        for p in range(o + 1, e):
+            A[p] = (F[p - 1] - F[p]) * IM[p] + GA[p]
+        A[e] = F[e - 1] * IM[e] + GA[e]
 
 
 @kernel(inline="always")

@@ -26,6 +26,12 @@ from chainrun.solver._steppers import (
 )
 
 
+#: a window of at most this many balls takes the first iterate of a landing whole: a
+#: step at two balls reaches 13 balls each way (``_generated._step_band``), and costs
+#: as much as the window's step there, which Newton may need no other than
+WHOLE_LANDING = 32
+
+
 @kernel(inline="always")
 def _save_start(S):
     for p in range(S.ints[I_M]):
@@ -165,8 +171,10 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     A DOP853 step's iterates are taken at the event's two balls alone (``_step_pair``,
     the same numbers there as the window's step), and the step it lands on is then
     taken whole, with its error test: one step of the window for each event (a
-    damped contact's unload takes four iterates on average). A series step's iterates
-    are evaluations of its series over the window."""
+    damped contact's unload takes four iterates on average). In a window no larger
+    than the pair's bands (``WHOLE_LANDING``) the first iterate is the window's step,
+    which is then kept if Newton needs no other. A series step's iterates are
+    evaluations of its series over the window."""
     hev = th * h
     if kind == EV_OPEN and err > 1.0 and not tay and (
             S.ints[I_DAMPED] == 0 or S.cp[C_ETA, j] == 0.0):
@@ -183,7 +191,7 @@ def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     nit = 0
     whole = True  # whether the last step taken was the whole window's
     while landing == 0:
-        if tay:
+        if tay or (nit == 0 and S.ints[I_M] <= WHOLE_LANDING):
             if not (_step(S, hev) <= 1.0):
                 landing = 2
                 break
