@@ -27,8 +27,8 @@ from chainrun.solver._steppers import (
 
 
 #: a window of at most this many balls takes the first iterate of a landing whole: a
-#: step at two balls reaches 13 balls each way (``_generated._step_band``), and costs
-#: as much as the window's step there, which Newton may need no other than
+#: step at two balls reaches 13 balls each way (``_generated._step_band``), as far as
+#: such a window's step, which is kept where Newton needs no second iterate
 WHOLE_LANDING = 32
 
 
