@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from chainrun.solver._drive import _drive_place, _drive_stage, _pinned
-from chainrun.solver._forces import _cluster_accelerations, _rhs
+from chainrun.solver._forces import _rhs, _span_accelerations
 from chainrun.solver._heap import _schedule_pair
 from chainrun.solver._jit import kernel
 from chainrun.solver._pairs import (
@@ -24,11 +24,11 @@ from chainrun.solver._pairs import (
 )
 from chainrun.solver._projection import _cluster_energy, _project_energy
 from chainrun.solver._state import (
-    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_DISS, C_ETA, C_HELD, C_KAPPA, F_DISS, F_JL,
-    F_JR, F_T, I_DAMPED, I_DENSE, I_DIRTY, I_DRIVEN, I_DSTAMP, I_LWALL, I_LWL, I_M, I_MAXWIN,
-    I_NCL,
-    I_NFREED, I_RWALL, I_RWL, I_SEALED, OPEN, SEALED, SL_PH, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA,
-    W_ETA, W_HELD, W_IM, W_MASS, _find_cluster, _free_at,
+    ACTIVE, B_ACC, B_IM, B_MASS, C_ALPHA, C_BETA, C_DISS, C_ETA, C_HELD, C_KAPPA, F_ALPHA,
+    F_DISS, F_JL, F_JR, F_T, I_DAMPED, I_DENSE, I_DIRTY, I_DRIVEN, I_DSTAMP, I_LWALL, I_LWL,
+    I_M, I_MAXWIN, I_MODE, I_NCL, I_NFREED, I_RWALL, I_RWL, I_SEALED, I_UNIT, OPEN, SEALED,
+    SL_PH, SL_V, SL_W, W_ACC, W_ALPHA, W_BETA, W_ETA, W_HELD, W_IM, W_MASS, _find_cluster,
+    _free_at,
 )
 
 
@@ -316,7 +316,9 @@ def _rebuild(S):
         if np.isnan(S.cen[c]):
             S.cen[c] = _cluster_energy(S, c)
             if not whole:
-                _cluster_accelerations(S, S.coff[c], S.coff[c] + S.chi[c] - S.clo[c])
+                _span_accelerations(S.X, S.FS, S.TR, S.WP, S.A, S.coff[c],
+                                    S.coff[c] + S.chi[c] - S.clo[c], S.ints[I_MODE],
+                                    S.fs[F_ALPHA], S.ints[I_UNIT] == 1)
     if whole:
         _rhs(S, S.X, S.V, S.A)
     if S.ints[I_DRIVEN] == 1:

@@ -86,46 +86,31 @@ def _accelerations(X, F, MK, WP, out, m, mode, alpha, unit):
     ``unit``: every mass 1 and no external force, where the forces are the
     accelerations.
     """
-    nc = m - 1
-    if nc == 0:  # a lone driven ball: no contact (its drive is added after)
-        out[0] = 0.0 if unit else WP[W_ACC, 0]
+    _span_accelerations(X, F, MK, WP, out, 0, m - 1, mode, alpha, unit)
+
+
+@kernel(inline="always")
+def _span_accelerations(X, F, MK, WP, out, o, e, mode, alpha, unit):
+    """Accelerations of compact balls o..e at positions X into out (forces of lanes
+    o..e-1 into F), nothing pushing from beyond o or e: the whole window
+    (``_accelerations``), or one cluster that formed (``_clusters._rebuild``). The
+    ends are peeled so that the loop has no branch."""
+    if e == o:  # a lone driven ball: no contact (its drive is added after)
+        out[o] = 0.0 if unit else WP[W_ACC, o]
         return
-    _forces(X, F, MK, WP[W_ALPHA], 0, nc, mode, alpha)
+    _forces(X, F, MK, WP[W_ALPHA], o, e, mode, alpha)
     if unit:
-        out[0] = -F[0]
-        for p in range(1, nc):
+        out[o] = -F[o]
+        for p in range(o + 1, e):
             out[p] = F[p - 1] - F[p]
-        out[nc] = F[nc - 1]
+        out[e] = F[e - 1]
     else:
         IM = WP[W_IM]
         GA = WP[W_ACC]
-        out[0] = -F[0] * IM[0] + GA[0]
-        for p in range(1, nc):
+        out[o] = -F[o] * IM[o] + GA[o]
+        for p in range(o + 1, e):
             out[p] = (F[p - 1] - F[p]) * IM[p] + GA[p]
-        out[nc] = F[nc - 1] * IM[nc] + GA[nc]
-
-
-@kernel
-def _cluster_accelerations(S, o, e):
-    """Accelerations of compact balls o..e, one cluster, at X into A (forces into FS):
-    ``_accelerations``' operations on its lanes, an undamped line's."""
-    F = S.FS
-    A = S.A
-    _forces(S.X, F, S.TR, S.WP[W_ALPHA], o, e, S.ints[I_MODE], S.fs[F_ALPHA])
-    if e == o:  # (a ball alone: no contact)
-        A[o] = 0.0 if S.ints[I_UNIT] == 1 else S.WP[W_ACC, o]
-    elif S.ints[I_UNIT] == 1:
-        A[o] = -F[o]
-        for p in range(o + 1, e):
-            A[p] = F[p - 1] - F[p]
-        A[e] = F[e - 1]
-    else:
-        IM = S.WP[W_IM]
-        GA = S.WP[W_ACC]
-        A[o] = -F[o] * IM[o] + GA[o]
-        for p in range(o + 1, e):
-            A[p] = (F[p - 1] - F[p]) * IM[p] + GA[p]
-        A[e] = F[e - 1] * IM[e] + GA[e]
+        out[e] = F[e - 1] * IM[e] + GA[e]
 
 
 @kernel(inline="always")
