@@ -37,7 +37,7 @@ def _engage_level(S, j):
     return max(xl - xr, 0.0) + max(S.cp[C_EPS, j], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
-@kernel(inline="always")
+@kernel
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]

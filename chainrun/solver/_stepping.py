@@ -161,7 +161,7 @@ def _trial(S, t, h, clipped, tay):
             return ST_STEP_UNDERFLOW, h, err, clipped, th, j, kind, lev
 
 
-@kernel(inline="always")
+@kernel
 def _land(S, t, h, err, hnext, th, j, kind, lev, tay):
     """Redo the step of h to end on the event found at th h (contact j's kind at level
     lev), refined by Newton on the step itself. Returns GO_ON landed (the event waits
