@@ -108,7 +108,7 @@ def _heap_compact(S):
         _sift_down(S, i, k)
 
 
-@kernel
+@kernel(inline="always")
 def _schedule_pair(S, j):
     """Predict the collision of free balls j, j+1, if they ever meet approaching at >= floor.
 

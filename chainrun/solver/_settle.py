@@ -37,7 +37,7 @@ def _engage_level(S, j):
     return max(xl - xr, 0.0) + max(S.cp[C_EPS, j], 4.0 * _rounding(abs(xl) + abs(xr)))
 
 
-@kernel
+@kernel(inline="always")
 def _apply_event(S, j, kind):
     """Set contact j's state from the event just reached (positions are synced)."""
     t = S.fs[F_T]
@@ -64,6 +64,14 @@ def _apply_event(S, j, kind):
         if not dormant:  # a dormant contact was closed already: nothing to log
             _log(S, t, j, EV_ENGAGE)
     return ok
+
+
+#: ``_apply_event`` as a call, for the places that apply an event now and then (a
+#: contact found due while settling, a damped contact's load switched, an unload that
+#: opens): a copy inlined there would cost compile time and save nothing. The step's
+#: own event, one per event of every line, keeps its copy (a call passes the State's
+#: arrays part by part, about 100 ns).
+_apply_event_call = kernel(getattr(_apply_event, "py_func", _apply_event))
 
 
 @kernel(inline="always")
@@ -240,7 +248,7 @@ def _settle(S):
             for j in range(j0, j1 + 1):
                 kind = _due(S, j)
                 if kind != 0:
-                    if not _apply_event(S, j, kind):
+                    if not _apply_event_call(S, j, kind):
                         return False
                     changed = True
                     break
@@ -277,7 +285,7 @@ def _loads_due(S):
             if (held and g > 0.0 and dg > 0.0) or (not held and g < 0.0 and dg < 0.0):
                 if S.ev_t.shape[0] - S.ints[I_NEV] < 1:
                     return  # (the log is full: the next pass switches it)
-                _apply_event(S, j, EV_UNLOAD if not held else EV_RELOAD)
+                _apply_event_call(S, j, EV_UNLOAD if not held else EV_RELOAD)
 
 
 @kernel(inline="always")
@@ -310,7 +318,7 @@ def _post_step(S):
             # the load vanished with the compression (in a slow collision, whose
             # damping goes as c^beta): it opens now, or its balls, held without force,
             # would part with no crossing left for a step to find
-            if not _apply_event(S, j, EV_OPEN):
+            if not _apply_event_call(S, j, EV_OPEN):
                 return False
     elif S.ints[I_M] > 0 and not parted:  # (parted: _settle, on the clusters now)
         if _dormant_due(S):
