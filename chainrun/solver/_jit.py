@@ -41,7 +41,7 @@ from numba.core import config
 
 #: a cold compile on a quiet 2-core machine of the kind CI runs on (the bench's section
 #: compile measures it), for the message
-COMPILE_ESTIMATE_S = 140
+COMPILE_ESTIMATE_S = 290
 #: after this many seconds of loading, say that it is compiling, and every so often after
 _NOTICE_AFTER_S = 2.0
 _PROGRESS_EVERY_S = 10.0
