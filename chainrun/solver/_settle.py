@@ -280,7 +280,7 @@ def _loads_due(S):
             w = S.V[p] - S.V[p + 1]
             held = S.cp[C_HELD, j] != 0.0
             if not held and w >= 0.0:
-                continue  # bearing and pressing: its load, a sum of terms >= 0, is too
+                continue  # bearing and pressing: a load of terms >= 0 cannot be below 0
             g, dg, _r = _load_rate(S, j, cj, w, S.A[p] - S.A[p + 1])
             if (held and g > 0.0 and dg > 0.0) or (not held and g < 0.0 and dg < 0.0):
                 if S.ev_t.shape[0] - S.ints[I_NEV] < 1:
